@@ -1,0 +1,30 @@
+# Every target does its own set-up: a fresh machine needs only python3 (with venv) and make.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.s2r-installed
+
+.PHONY: test demo lint typecheck pytest test-browser bench profiles clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[ros,dev]"
+	touch $(STAMP)
+
+test: $(STAMP) lint typecheck pytest
+
+lint: $(STAMP)
+	$(BIN)/ruff check s2r tests bench
+
+typecheck: $(STAMP)
+	$(BIN)/mypy s2r
+
+pytest: $(STAMP)
+	$(BIN)/pytest -q -n 2 --dist loadfile
+
+demo: $(STAMP)
+	$(BIN)/python -m s2r.demo
+
+clean:
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache

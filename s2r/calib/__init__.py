@@ -1,0 +1,1 @@
+"""Chessboard detection, calibration solving and calibration inputs (folders, bags)."""

@@ -1,0 +1,69 @@
+"""Helpers shared by the CLI command modules: JSON output, progress bar, common options."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+__all__ = ["ProgressBar", "add_force", "add_json", "print_json", "to_jsonable"]
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert numpy types, tuples, Paths and pydantic models to JSON-ready values (NaN -> None)."""
+    if hasattr(value, "model_dump"):
+        return to_jsonable(value.model_dump(mode="json"))
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return to_jsonable(value.item())
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    return str(value)
+
+
+def print_json(data: Any) -> None:
+    """Print ``data`` as indented JSON on stdout."""
+    print(json.dumps(to_jsonable(data), indent=2))
+
+
+def add_json(parser: argparse.ArgumentParser) -> None:
+    """Add ``--json`` (machine-readable output on stdout)."""
+    parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout")
+
+
+def add_force(parser: argparse.ArgumentParser) -> None:
+    """Add ``--force`` (allow replacing existing outputs)."""
+    parser.add_argument("--force", action="store_true", help="replace existing outputs")
+
+
+class ProgressBar:
+    """A progress callback drawing ``label [#####-----] done/total`` on stderr, only on a terminal."""
+
+    def __init__(self, *, enabled: bool | None = None, width: int = 30) -> None:
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.width = width
+        self._last = 0.0
+
+    def __call__(self, done: int, total: int, label: str) -> None:
+        if not self.enabled or total <= 0:
+            return
+        now = time.monotonic()
+        if done < total and now - self._last < 0.1:
+            return
+        self._last = now
+        filled = int(self.width * done / total)
+        bar = "#" * filled + "-" * (self.width - filled)
+        end = "\n" if done >= total else ""
+        sys.stderr.write(f"\r{label:<18} [{bar}] {done}/{total}{end}")
+        sys.stderr.flush()

@@ -1,0 +1,1 @@
+"""Rectification, matching presets and the stereo depth pipeline."""

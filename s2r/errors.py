@@ -1,0 +1,86 @@
+"""The s2r error tree: one root, one subclass per stage.
+
+Every error renders as ONE line that names the file and/or field at fault and what to do about it,
+because the CLI prints ``str(error)`` as ``error: ...`` and exits 2 (no traceback unless ``--debug``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = [
+    "CalibrationError",
+    "DepthError",
+    "FormatError",
+    "OutputExistsError",
+    "ProfileError",
+    "RenderError",
+    "S2RError",
+    "SourceError",
+    "ValidateError",
+]
+
+
+class S2RError(Exception):
+    """Root of every error s2r raises on purpose (bad input, refused writes, impossible requests).
+
+    Args:
+        message: what is wrong, without the location.
+        path: the file at fault, if any.
+        field: the dotted field path or XML element at fault, if any.
+        hint: what the user should do about it.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        path: str | Path | None = None,
+        field: str | None = None,
+        hint: str | None = None,
+    ) -> None:
+        self.message = message
+        self.path = None if path is None else str(path)
+        self.field = field
+        self.hint = hint
+        super().__init__(self.one_line())
+
+    def one_line(self) -> str:
+        """The error as ``path: field: message (hint)`` on a single line."""
+        parts = [p for p in (self.path, self.field) if p]
+        text = ": ".join([*parts, self.message])
+        if self.hint:
+            text = f"{text} ({self.hint})"
+        return " ".join(text.split())
+
+
+class ProfileError(S2RError):
+    """A profile is invalid, unknown or unreadable."""
+
+
+class FormatError(S2RError):
+    """An outside file format (ROS, OpenCV, Kalibr, RealSense, ...) could not be read or written."""
+
+
+class SourceError(S2RError):
+    """A robot description (URDF, xacro, SDF) could not be turned into a profile."""
+
+
+class CalibrationError(S2RError):
+    """Calibration inputs are unusable or the solve failed."""
+
+
+class RenderError(S2RError):
+    """A PyBullet render request cannot be satisfied."""
+
+
+class DepthError(S2RError):
+    """The depth pipeline got inputs it cannot process."""
+
+
+class ValidateError(S2RError):
+    """A validation request is malformed (tolerances, distances, report folder)."""
+
+
+class OutputExistsError(S2RError):
+    """An output already exists and ``force`` was not given: nothing was overwritten."""

@@ -1,0 +1,83 @@
+"""Safe file output: atomic writes, no silent overwrites, content hashes for provenance."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+from s2r.errors import OutputExistsError, S2RError
+
+__all__ = [
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "check_output_free",
+    "prepare_output_dir",
+    "sha256_file",
+]
+
+
+def check_output_free(path: str | Path, *, force: bool) -> Path:
+    """Raise :class:`OutputExistsError` if ``path`` exists and ``force`` is false; return it as a Path."""
+    out = Path(path)
+    if out.exists() and not force:
+        raise OutputExistsError("already exists; nothing was overwritten", path=out, hint="pass --force to replace it")
+    return out
+
+
+def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and an atomic rename.
+
+    A crash mid-write leaves the old file (or no file), never a truncated one. Refuses to replace an
+    existing file unless ``force``.
+    """
+    out = check_output_free(path, force=force)
+    parent = out.parent if str(out.parent) else Path(".")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise S2RError(f"cannot write: {exc.strerror}", path=out, hint="choose a writable location") from exc
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp_name, out)
+    except BaseException:
+        Path(tmp_name).unlink(missing_ok=True)
+        raise
+    return out
+
+
+def atomic_write_text(path: str | Path, text: str, *, force: bool = False) -> Path:
+    """UTF-8 text version of :func:`atomic_write_bytes`."""
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force)
+
+
+def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
+    """Create ``path`` as an output folder; refuse a non-empty existing folder unless ``force``."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError("exists and is not a folder", path=out, hint="choose another output folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise OutputExistsError(
+            "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise S2RError(f"cannot create folder: {exc.strerror}", path=out, hint="choose a writable location") from exc
+    if not os.access(out, os.W_OK):
+        raise S2RError("folder is not writable", path=out, hint="choose a writable location")
+    return out
+
+
+def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
+    """Hex SHA-256 of a file's content, read in chunks (constant memory)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        while chunk := handle.read(chunk_bytes):
+            digest.update(chunk)
+    return digest.hexdigest()

@@ -1,0 +1,374 @@
+"""The typed stereo camera profile: intrinsics, distortion, extrinsics, matcher settings, provenance.
+
+All models are frozen pydantic models with ``extra="forbid"`` and reject NaN/inf. Units are in the
+field names: ``_px`` pixels, ``_m`` metres, ``_rad`` radians, ``_hz`` hertz. Pixel coordinates follow
+OpenCV's convention (0-based, pixel centres at integers) unless ``provenance.convention`` says otherwise.
+
+Extrinsics use OpenCV's stereo convention: ``X_right = R @ X_left + T`` with points in the LEFT optical
+frame, ``T`` in metres. A right camera 0.1 m to the right of the left one has ``T = (-0.1, 0, 0)``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from s2r._version import __version__
+from s2r.geometry import ORTHONORMAL_TOL, check_rotation, rotation_angle_rad
+
+__all__ = [
+    "DEFAULT_SUBPIXEL_PX",
+    "DISTORTION_COEFFICIENTS",
+    "SCHEMA_VERSION",
+    "CalibrationQuality",
+    "Camera",
+    "CameraUncertainty",
+    "Distortion",
+    "DroppedView",
+    "Extrinsics",
+    "MatcherSettings",
+    "MonoProfile",
+    "Provenance",
+    "SimulationSettings",
+    "SourceFile",
+    "StereoProfile",
+]
+
+SCHEMA_VERSION: Literal[1] = 1
+#: Intel's typical subpixel matching error ``s`` in the depth RMS model, pixels.
+DEFAULT_SUBPIXEL_PX = 0.08
+#: Number of coefficients per distortion model, in OpenCV's order.
+DISTORTION_COEFFICIENTS: dict[str, int] = {"plumb_bob": 5, "rational_polynomial": 8, "equidistant": 4}
+
+DistortionModel = Literal["plumb_bob", "rational_polynomial", "equidistant"]
+Origin = Literal["sim", "real", "nominal"]
+Algorithm = Literal["sgbm", "sgbm_3way", "hh", "hh4", "bm"]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False, validate_default=True)
+
+
+class Distortion(_Model):
+    """Lens distortion: ``plumb_bob`` (k1 k2 p1 p2 k3), ``rational_polynomial`` (k1 k2 p1 p2 k3 k4 k5 k6)
+    or ``equidistant`` (fisheye k1 k2 k3 k4), coefficients in OpenCV's order and focal-normalised units."""
+
+    model: DistortionModel = "plumb_bob"
+    coefficients: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _count_matches_model(self) -> Distortion:
+        expected = DISTORTION_COEFFICIENTS[self.model]
+        if len(self.coefficients) != expected:
+            raise ValueError(
+                f"distortion model {self.model} needs {expected} coefficients, got {len(self.coefficients)}"
+            )
+        return self
+
+    @property
+    def is_zero(self) -> bool:
+        """True when every coefficient is exactly zero (an ideal pinhole)."""
+        return all(c == 0.0 for c in self.coefficients)
+
+
+class CameraUncertainty(_Model):
+    """One-sigma standard deviations of a camera's calibrated parameters (same units as the values)."""
+
+    fx_px: float | None = Field(default=None, ge=0)
+    fy_px: float | None = Field(default=None, ge=0)
+    cx_px: float | None = Field(default=None, ge=0)
+    cy_px: float | None = Field(default=None, ge=0)
+    distortion: tuple[float, ...] | None = None
+
+
+class Camera(_Model):
+    """One pinhole camera: image size, intrinsics (pixels), distortion, frame name."""
+
+    width_px: int = Field(gt=0)
+    height_px: int = Field(gt=0)
+    fx_px: float
+    fy_px: float
+    cx_px: float
+    cy_px: float
+    skew: float = 0.0
+    distortion: Distortion = Distortion()
+    frame_id: str = ""
+    std: CameraUncertainty | None = None
+
+    @field_validator("fx_px", "fy_px")
+    @classmethod
+    def _positive_focal(cls, value: float) -> float:
+        if value <= 0:
+            raise ValueError(f"focal length must be positive, got {value}")
+        return value
+
+    @model_validator(mode="after")
+    def _principal_point_inside(self) -> Camera:
+        if not (0.0 <= self.cx_px <= self.width_px) or not (0.0 <= self.cy_px <= self.height_px):
+            raise ValueError(
+                f"principal point ({self.cx_px}, {self.cy_px}) lies outside the "
+                f"{self.width_px}x{self.height_px} image"
+            )
+        return self
+
+    @property
+    def K(self) -> NDArray[np.float64]:
+        """3x3 camera matrix in pixels."""
+        return np.array(
+            [[self.fx_px, self.skew, self.cx_px], [0.0, self.fy_px, self.cy_px], [0.0, 0.0, 1.0]]
+        )
+
+    @property
+    def D(self) -> NDArray[np.float64]:
+        """Distortion coefficients as a float64 vector in OpenCV's order."""
+        return np.array(self.distortion.coefficients, dtype=np.float64)
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(width, height)`` in pixels, as OpenCV wants it."""
+        return (self.width_px, self.height_px)
+
+    @property
+    def hfov_rad(self) -> float:
+        """Horizontal field of view (radians) between the image's outer pixel EDGES, at -0.5 and W - 0.5 in
+        OpenCV's 0-based pixel-centre convention (so cx = (W - 1) / 2 is the exact centre)."""
+        left_edge, right_edge = self.cx_px + 0.5, self.width_px - 0.5 - self.cx_px
+        return math.atan(left_edge / self.fx_px) + math.atan(right_edge / self.fx_px)
+
+    @property
+    def vfov_rad(self) -> float:
+        """Vertical field of view (radians) between the outer pixel edges, as :attr:`hfov_rad`."""
+        top_edge, bottom_edge = self.cy_px + 0.5, self.height_px - 0.5 - self.cy_px
+        return math.atan(top_edge / self.fy_px) + math.atan(bottom_edge / self.fy_px)
+
+    def scaled(self, width_px: int, height_px: int) -> Camera:
+        """This camera at another resolution, scaling K about pixel edges (``c' = s (c + 0.5) - 0.5``)."""
+        sx, sy = width_px / self.width_px, height_px / self.height_px
+        return self.model_copy(
+            update={
+                "width_px": width_px,
+                "height_px": height_px,
+                "fx_px": self.fx_px * sx,
+                "fy_px": self.fy_px * sy,
+                "cx_px": sx * (self.cx_px + 0.5) - 0.5,
+                "cy_px": sy * (self.cy_px + 0.5) - 0.5,
+                "skew": self.skew * sx,
+                "std": None,
+            }
+        )
+
+
+class Extrinsics(_Model):
+    """Right camera relative to the left, OpenCV convention: ``X_right = R @ X_left + T`` (metres)."""
+
+    rotation: tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]] = (
+        (1.0, 0.0, 0.0),
+        (0.0, 1.0, 0.0),
+        (0.0, 0.0, 1.0),
+    )
+    translation_m: tuple[float, float, float]
+    baseline_std_m: float | None = Field(default=None, ge=0)
+
+    @model_validator(mode="after")
+    def _valid_rigid_motion(self) -> Extrinsics:
+        check_rotation(self.rotation, name="rotation", tol=ORTHONORMAL_TOL)
+        if float(np.linalg.norm(self.translation_m)) < 1e-6:
+            raise ValueError("baseline is zero: translation_m must separate the two cameras")
+        return self
+
+
+class MatcherSettings(_Model):
+    """Stereo matcher settings (OpenCV StereoSGBM / StereoBM names) and the working depth range in metres.
+
+    ``num_disparities`` None means: derive it from ``min_depth_m`` (fx' * B / z_min, rounded up to 16).
+    """
+
+    algorithm: Algorithm = "sgbm"
+    min_disparity: int = 0
+    num_disparities: int | None = Field(default=None, gt=0)
+    block_size: int = Field(default=5, ge=1, le=255)
+    p1: int | None = Field(default=None, ge=0)
+    p2: int | None = Field(default=None, ge=0)
+    disp12_max_diff: int = 1
+    uniqueness_ratio: int = Field(default=10, ge=0)
+    speckle_window_size: int = Field(default=100, ge=0)
+    speckle_range: int = Field(default=32, ge=0)
+    pre_filter_cap: int = Field(default=63, ge=1)
+    texture_threshold: int = Field(default=10, ge=0)
+    min_depth_m: float = Field(default=0.3, gt=0)
+    max_depth_m: float = Field(default=5.0, gt=0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> MatcherSettings:
+        if self.num_disparities is not None and self.num_disparities % 16:
+            raise ValueError(f"num_disparities must be a multiple of 16, got {self.num_disparities}")
+        if self.block_size % 2 == 0:
+            raise ValueError(f"block_size must be odd, got {self.block_size}")
+        if self.algorithm == "bm" and self.block_size < 5:
+            raise ValueError(f"StereoBM needs block_size >= 5, got {self.block_size}")
+        if self.p1 is not None and self.p2 is not None and self.p2 <= self.p1:
+            raise ValueError(f"p2 must exceed p1, got p1={self.p1} p2={self.p2}")
+        if self.max_depth_m <= self.min_depth_m:
+            raise ValueError(f"max_depth_m ({self.max_depth_m}) must exceed min_depth_m ({self.min_depth_m})")
+        return self
+
+
+class SourceFile(_Model):
+    """A file a profile was made from, with its content hash."""
+
+    path: str
+    sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+
+
+class DroppedView(_Model):
+    """A calibration view rejected as an outlier (or undetected), with why."""
+
+    name: str
+    rms_px: float | None = None
+    reason: str = ""
+
+
+class CalibrationQuality(_Model):
+    """Figures of a chessboard calibration, kept with the profile it produced."""
+
+    pattern: tuple[int, int]
+    square_m: float = Field(gt=0)
+    views_used: int = Field(ge=0)
+    views_dropped: tuple[DroppedView, ...] = ()
+    rms_left_px: float | None = None
+    rms_right_px: float | None = None
+    rms_stereo_px: float | None = None
+    epipolar_rms_px: float | None = None
+    coverage_left: float | None = Field(default=None, ge=0, le=1)
+    coverage_right: float | None = Field(default=None, ge=0, le=1)
+    tilt_range_deg: tuple[float, float] | None = None
+    distance_range_m: tuple[float, float] | None = None
+    distortion_terms: str = "k1k2"
+
+
+class SimulationSettings(_Model):
+    """Simulator-side facts of a camera (clip planes, rate, noise); used by the renderer."""
+
+    clip_near_m: float = Field(default=0.05, gt=0)
+    clip_far_m: float = Field(default=100.0, gt=0)
+    update_rate_hz: float | None = Field(default=None, gt=0)
+    noise_stddev: float | None = Field(default=None, ge=0)
+
+    @model_validator(mode="after")
+    def _clip_order(self) -> SimulationSettings:
+        if self.clip_far_m <= self.clip_near_m:
+            raise ValueError(f"clip_far_m ({self.clip_far_m}) must exceed clip_near_m ({self.clip_near_m})")
+        return self
+
+
+class Provenance(_Model):
+    """Where a profile came from: origin, method, source files, tool version, date, pixel convention."""
+
+    origin: Origin
+    method: str
+    convention: str = "opencv"
+    sources: tuple[SourceFile, ...] = ()
+    tool_version: str = __version__
+    created: str = Field(default_factory=lambda: _dt.date.today().isoformat())
+    notes: str = ""
+    calibration: CalibrationQuality | None = None
+
+
+class StereoProfile(_Model):
+    """A stereo camera: two cameras, their extrinsics, matcher settings and provenance."""
+
+    schema_version: Literal[1] = SCHEMA_VERSION
+    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")
+    description: str = ""
+    left: Camera
+    right: Camera
+    extrinsics: Extrinsics
+    matcher: MatcherSettings = MatcherSettings()
+    simulation: SimulationSettings | None = None
+    provenance: Provenance
+
+    @model_validator(mode="after")
+    def _cameras_fit_matcher(self) -> StereoProfile:
+        if self.left.image_size != self.right.image_size:
+            raise ValueError(
+                f"left and right image sizes differ ({self.left.width_px}x{self.left.height_px} vs "
+                f"{self.right.width_px}x{self.right.height_px}); rectification needs one size"
+            )
+        nd = self.matcher.num_disparities
+        if nd is not None and self.matcher.min_disparity + nd >= self.left.width_px:
+            raise ValueError(
+                f"matcher disparity range {self.matcher.min_disparity}+{nd} px does not fit the "
+                f"{self.left.width_px} px wide image"
+            )
+        return self
+
+    @property
+    def R(self) -> NDArray[np.float64]:
+        """3x3 rotation, OpenCV convention (``X_right = R X_left + T``)."""
+        return np.array(self.extrinsics.rotation, dtype=np.float64)
+
+    @property
+    def T(self) -> NDArray[np.float64]:
+        """Translation in metres, OpenCV convention, shape (3,)."""
+        return np.array(self.extrinsics.translation_m, dtype=np.float64)
+
+    @property
+    def baseline_m(self) -> float:
+        """Distance between the optical centres in metres."""
+        return float(np.linalg.norm(self.T))
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(width, height)`` in pixels (both cameras share it)."""
+        return self.left.image_size
+
+    @property
+    def rotation_angle_rad(self) -> float:
+        """Angle of the rotation between the two cameras, radians."""
+        return rotation_angle_rad(self.R)
+
+    def disparity_px(self, depth_m: float) -> float:
+        """Ideal disparity (pixels) of a point at ``depth_m`` on the left axis: ``fx * B / Z``."""
+        return self.left.fx_px * self.baseline_m / depth_m
+
+    def num_disparities_for(self, min_depth_m: float | None = None) -> int:
+        """Disparity count that sees down to ``min_depth_m`` (default the matcher's): fx B / z, up to 16."""
+        z_min = self.matcher.min_depth_m if min_depth_m is None else min_depth_m
+        needed = self.disparity_px(z_min) - self.matcher.min_disparity
+        return int(max(16, math.ceil(needed / 16.0) * 16))
+
+    def depth_range_m(self, matcher: MatcherSettings | None = None) -> tuple[float, float]:
+        """Nearest and farthest depth (metres) a matcher's disparity range can see: ``fx B / d``.
+
+        Nearest uses the largest disparity (min_disparity + num_disparities - 1), farthest the smallest
+        positive one (min_disparity, or 1 px when that is 0); the far end is where depth resolution ends.
+        """
+        m = self.matcher if matcher is None else matcher
+        nd = m.num_disparities if m.num_disparities is not None else self.num_disparities_for(m.min_depth_m)
+        fb = self.left.fx_px * self.baseline_m
+        d_max = m.min_disparity + nd - 1
+        d_min = max(m.min_disparity, 1)
+        return (fb / d_max if d_max > 0 else math.inf, fb / d_min)
+
+    def depth_rms_m(self, depth_m: float | NDArray[np.float64], subpixel_px: float = DEFAULT_SUBPIXEL_PX) -> Any:
+        """Intel's theoretical depth RMS error (metres) at ``depth_m``: ``Z^2 s / (fx B)``."""
+        return np.asarray(depth_m, dtype=np.float64) ** 2 * subpixel_px / (self.left.fx_px * self.baseline_m)
+
+    def max_depth_within_m(self, relative_error: float = 0.02, subpixel_px: float = DEFAULT_SUBPIXEL_PX) -> float:
+        """Largest depth (metres) whose theoretical RMS stays under ``relative_error`` of the depth."""
+        return relative_error * self.left.fx_px * self.baseline_m / subpixel_px
+
+
+class MonoProfile(_Model):
+    """A single calibrated camera (``s2r calibrate --mono``)."""
+
+    schema_version: Literal[1] = SCHEMA_VERSION
+    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")
+    description: str = ""
+    camera: Camera
+    provenance: Provenance

@@ -1,0 +1,1 @@
+"""Sim-versus-real validation: diffs, depth accuracy, verdicts and reports."""

@@ -1,0 +1,77 @@
+"""Imports run one way (DESIGN.md): a wrong-way import, or cv2/pybullet outside their homes, fails here."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
+
+#: Layer of each top-level module or subpackage; a module may import only from lower layers
+#: (or from itself). formats and sources share a layer and must not import each other; so do
+#: calib, depth and render.
+LAYERS: dict[str, int] = {
+    "_version": 0, "errors": 0, "progress": 0, "fileio": 1,
+    "geometry": 1,  # fileio (1) and geometry (1) do not import each other
+    "profile": 2,
+    "rectification": 3, "formats": 3, "sources": 3,
+    "registry": 4, "htmlreport": 4,
+    "calib": 5, "depth": 5, "render": 5,
+    "compat": 6, "validate": 6,
+    "cli": 7, "__main__": 8, "__init__": 8,
+}
+CV2_HOMES = {"calib", "depth", "render", "rectification", "formats.opencv", "formats.ros", "validate"}
+PYBULLET_HOMES = {"render"}
+
+
+def _unit(path: Path) -> str:
+    rel = path.relative_to(PACKAGE).with_suffix("")
+    parts = rel.parts
+    return parts[0]
+
+
+def _imports(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text())
+    found: list[str] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.extend(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.append(node.module)
+    return found
+
+
+def _modules() -> list[Path]:
+    return sorted(PACKAGE.rglob("*.py"))
+
+
+def test_every_unit_has_a_layer() -> None:
+    units = {_unit(p) for p in _modules()}
+    assert units <= set(LAYERS), f"add these to LAYERS: {sorted(units - set(LAYERS))}"
+
+
+def test_imports_run_one_way() -> None:
+    wrong = []
+    for path in _modules():
+        unit = _unit(path)
+        for name in _imports(path):
+            if not name.startswith("s2r.") or name == "s2r":
+                continue
+            target = name.split(".")[1]
+            if target == unit:
+                continue
+            if LAYERS[target] >= LAYERS[unit]:
+                wrong.append(f"{path.relative_to(PACKAGE)} imports {name}")
+    assert not wrong, "wrong-way imports:\n" + "\n".join(wrong)
+
+
+def test_heavy_libraries_stay_home() -> None:
+    wrong = []
+    for path in _modules():
+        rel = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        homes = {"cv2": CV2_HOMES, "pybullet": PYBULLET_HOMES}
+        for name in _imports(path):
+            lib = name.split(".")[0]
+            if lib in homes and not any(rel == h or rel.startswith(h + ".") for h in homes[lib]):
+                wrong.append(f"{rel} imports {lib}")
+    assert not wrong, "\n".join(wrong)
