@@ -11,14 +11,15 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 #: (or from itself). formats and sources share a layer and must not import each other; so do
 #: calib, depth and render.
 LAYERS: dict[str, int] = {
-    "_version": 0, "errors": 0, "progress": 0, "fileio": 1,
-    "geometry": 1,  # fileio (1) and geometry (1) do not import each other
+    "_version": 0, "errors": 0, "progress": 0,
+    "fileio": 1, "geometry": 1,  # fileio and geometry do not import each other
     "profile": 2,
-    "rectification": 3, "formats": 3, "sources": 3,
-    "registry": 4, "htmlreport": 4,
-    "calib": 5, "depth": 5, "render": 5,
-    "compat": 6, "validate": 6,
-    "cli": 7, "__main__": 8, "__init__": 8,
+    "rectification": 3,
+    "formats": 4, "sources": 4,
+    "registry": 5, "htmlreport": 5,
+    "calib": 6, "depth": 6, "render": 6,
+    "compat": 7, "validate": 7,
+    "cli": 8, "__main__": 9, "__init__": 9,
 }
 CV2_HOMES = {"calib", "depth", "render", "rectification", "formats.opencv", "formats.ros", "validate"}
 PYBULLET_HOMES = {"render"}
