@@ -76,16 +76,17 @@ def stereo_rectification(
     out_size = size if image_size is None else image_size
     roi1: Any
     roi2: Any
+    T = profile.T.reshape(3, 1)  # OpenCV 5's stereoRectify wants a 3x1 column, not a flat (3,) vector
     if profile.left.distortion.model == "equidistant":
         # Fisheye lenses need OpenCV's fisheye model; it has no valid-pixel ROI, so report the full image.
         R1, R2, P1, P2, Q = cv2.fisheye.stereoRectify(
-            profile.left.K, profile.left.D, profile.right.K, profile.right.D, size, profile.R, profile.T,
+            profile.left.K, profile.left.D, profile.right.K, profile.right.D, size, profile.R, T,
             flags=cv2.CALIB_ZERO_DISPARITY, newImageSize=out_size, balance=alpha,
         )
         roi1 = roi2 = (0, 0, int(out_size[0]), int(out_size[1]))
     else:
         R1, R2, P1, P2, Q, roi1, roi2 = cv2.stereoRectify(
-            profile.left.K, profile.left.D, profile.right.K, profile.right.D, size, profile.R, profile.T,
+            profile.left.K, profile.left.D, profile.right.K, profile.right.D, size, profile.R, T,
             flags=cv2.CALIB_ZERO_DISPARITY, alpha=alpha, newImageSize=out_size,
         )
     return StereoRectification(
