@@ -1,0 +1,235 @@
+"""Helpers shared by the outside-format modules: strict number parsing, profile assembly, provenance.
+
+Every helper turns bad input into a one-line :class:`FormatError` naming the file and the field, so
+the format modules never leak a ``TypeError``, ``ValueError`` or pydantic ``ValidationError``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+from pydantic import BaseModel, ValidationError
+
+from s2r.errors import FormatError
+from s2r.fileio import sha256_file
+from s2r.formats.s2r_yaml import validation_message
+from s2r.geometry import ORTHONORMAL_TOL
+from s2r.profile import (
+    DISTORTION_COEFFICIENTS,
+    Camera,
+    Distortion,
+    Extrinsics,
+    Provenance,
+    SourceFile,
+    StereoProfile,
+)
+
+__all__ = [
+    "as_float",
+    "as_int",
+    "as_matrix",
+    "build_camera",
+    "build_stereo",
+    "check_rotation_field",
+    "distortion_for",
+    "provenance_for",
+    "read_text",
+    "read_yaml",
+    "require",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def read_text(path: str | Path) -> str:
+    """The file's UTF-8 text; FormatError naming the file when it is missing or unreadable."""
+    source = Path(path)
+    try:
+        return source.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FormatError("file not found", path=source, hint="check the path") from None
+    except IsADirectoryError:
+        raise FormatError("is a folder, not a file", path=source, hint="pass the file inside it") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise FormatError(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
+
+
+def read_yaml(text: str, path: str | Path) -> Any:
+    """Parse YAML text (safe loader); FormatError with the line number when malformed."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else None
+        problem = getattr(exc, "problem", None) or "not valid YAML"
+        raise FormatError(f"malformed YAML: {problem}", path=path, field=where) from None
+    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
+        # the safe loader's timestamp/int constructors can raise plain Python errors on odd scalars
+        raise FormatError(f"malformed YAML: {exc}", path=path) from None
+
+
+def require(mapping: Any, key: str, path: str | Path, *, prefix: str = "") -> Any:
+    """``mapping[key]``; FormatError naming the field when the mapping or the key is missing."""
+    field = f"{prefix}{key}"
+    if not isinstance(mapping, dict):
+        where = prefix.rstrip(".") or "(top level)"
+        raise FormatError("expected a mapping", path=path, field=where)
+    if key not in mapping:
+        raise FormatError("required field is missing (add it)", path=path, field=field)
+    return mapping[key]
+
+
+def as_float(value: Any, path: str | Path, field: str) -> float:
+    """A finite float from a YAML/JSON scalar; bools, strings, NaN and inf are refused."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise FormatError(f"expected a number, got {type(value).__name__}", path=path, field=field)
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise FormatError(f"must be a finite number, got {number}", path=path, field=field)
+    return number
+
+
+def as_int(value: Any, path: str | Path, field: str) -> int:
+    """A positive integer (image sizes); FormatError naming the field otherwise."""
+    number = as_float(value, path, field)
+    if number != int(number) or number <= 0:
+        raise FormatError(f"must be a positive whole number, got {value}", path=path, field=field)
+    return int(number)
+
+
+def as_matrix(value: Any, shape: tuple[int, ...], path: str | Path, field: str) -> FloatArray:
+    """A finite float64 array of ``shape`` from a flat or nested list of numbers."""
+    flat = _flatten(value, path, field)
+    expected = int(np.prod(shape))
+    if len(flat) != expected:
+        raise FormatError(f"expected {expected} numbers, got {len(flat)}", path=path, field=field)
+    return np.array(flat, dtype=np.float64).reshape(shape)
+
+
+def _flatten(value: Any, path: str | Path, field: str) -> list[float]:
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if not isinstance(value, (list, tuple)):
+        raise FormatError(f"expected a list of numbers, got {type(value).__name__}", path=path, field=field)
+    out: list[float] = []
+    for item in value:
+        if isinstance(item, (list, tuple)):
+            out.extend(_flatten(item, path, field))
+        else:
+            out.append(as_float(item, path, field))
+    return out
+
+
+def check_rotation_field(rot: FloatArray, path: str | Path, field: str) -> FloatArray:
+    """Refuse a 3x3 matrix that is not a rotation (orthonormal, det +1, within ORTHONORMAL_TOL)."""
+    err = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
+    if err > ORTHONORMAL_TOL:
+        raise FormatError(
+            f"not a rotation: max |R^T R - I| = {err:.2e} > {ORTHONORMAL_TOL:.0e}", path=path, field=field
+        )
+    det = float(np.linalg.det(rot))
+    if abs(det - 1.0) > ORTHONORMAL_TOL:
+        raise FormatError(f"not a rotation: determinant {det:.6f}, expected +1", path=path, field=field)
+    return rot
+
+
+def distortion_for(model: str, coeffs: Sequence[float], path: str | Path, field: str) -> Distortion:
+    """A :class:`Distortion`, checking the coefficient count of ``model`` (an s2r model name)."""
+    if model not in DISTORTION_COEFFICIENTS:
+        known = ", ".join(DISTORTION_COEFFICIENTS)
+        raise FormatError(f"unsupported distortion model {model!r} (supported: {known})", path=path, field=field)
+    expected = DISTORTION_COEFFICIENTS[model]
+    values = [float(c) for c in coeffs]
+    if not values:
+        values = [0.0] * expected  # an empty list means "no distortion" in ROS and Kalibr files
+    if len(values) != expected:
+        raise FormatError(
+            f"distortion model {model} needs {expected} coefficients, got {len(values)}", path=path, field=field
+        )
+    return Distortion(model=model, coefficients=tuple(values))  # type: ignore[arg-type]
+
+
+def _validated(model: type[BaseModel], data: dict[str, Any], path: str | Path, field: str) -> Any:
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        loc, msg = validation_message(exc)
+        where = field if loc == "(top level)" else f"{field}.{loc}" if field else loc
+        raise FormatError(msg, path=path, field=where) from None
+
+
+def build_camera(
+    *,
+    K: FloatArray,
+    size: tuple[int, int],
+    distortion: Distortion,
+    path: str | Path,
+    field: str,
+    frame_id: str = "",
+) -> Camera:
+    """A :class:`Camera` from a 3x3 K (pixels) and ``(width, height)``; FormatError naming ``field``."""
+    if K[0, 0] <= 0 or K[1, 1] <= 0:
+        raise FormatError(
+            f"focal length must be positive, got fx={K[0, 0]:g} fy={K[1, 1]:g}", path=path, field=field,
+            hint="an all-zero camera matrix means the camera was never calibrated",
+        )
+    width, height = size
+    if not (0.0 <= K[0, 2] <= width and 0.0 <= K[1, 2] <= height):
+        raise FormatError(
+            f"principal point ({K[0, 2]:g}, {K[1, 2]:g}) lies outside the {width}x{height} image",
+            path=path, field=field,
+        )
+    data = {
+        "width_px": width, "height_px": height, "fx_px": float(K[0, 0]), "fy_px": float(K[1, 1]),
+        "cx_px": float(K[0, 2]), "cy_px": float(K[1, 2]), "skew": float(K[0, 1]),
+        "distortion": distortion.model_dump(), "frame_id": frame_id,
+    }
+    camera: Camera = _validated(Camera, data, path, field)
+    return camera
+
+
+def build_stereo(
+    *,
+    name: str,
+    left: Camera,
+    right: Camera,
+    R: FloatArray,
+    T: FloatArray,
+    provenance: Provenance,
+    path: str | Path,
+    description: str = "",
+) -> StereoProfile:
+    """A :class:`StereoProfile` (OpenCV extrinsics, metres); FormatError naming the file on failure."""
+    if left.image_size != right.image_size:
+        raise FormatError(
+            f"left and right image sizes differ ({left.width_px}x{left.height_px} vs "
+            f"{right.width_px}x{right.height_px})", path=path, field="image size",
+            hint="both cameras of a stereo pair must share one resolution",
+        )
+    extrinsics = _validated(
+        Extrinsics, {"rotation": R.tolist(), "translation_m": T.tolist()}, path, "extrinsics"
+    )
+    safe_name = "".join(c if c.isalnum() or c in "_.-" else "_" for c in name) or "imported"
+    data = {
+        "name": safe_name, "description": description, "left": left.model_dump(), "right": right.model_dump(),
+        "extrinsics": extrinsics.model_dump(), "provenance": provenance.model_dump(),
+    }
+    profile: StereoProfile = _validated(StereoProfile, data, path, "")
+    return profile
+
+
+def provenance_for(
+    paths: Sequence[str | Path], fmt: str, *, origin: str = "real", notes: str = ""
+) -> Provenance:
+    """Provenance of an imported profile: origin, ``imported from <fmt>``, the sources with sha256."""
+    sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in paths)
+    return Provenance(origin=origin, method=f"imported from {fmt}", sources=sources, notes=notes)  # type: ignore[arg-type]

@@ -1,0 +1,261 @@
+"""ROS camera_info: the camera_calibration_parsers YAML pair (left.yaml/right.yaml) and ``rostopic echo`` text.
+
+A stereo profile exports as two camera_info files of the RECTIFIED pair (OpenCV ``stereoRectify`` through
+:func:`s2r.rectification.stereo_rectification`): each holds the raw K and D, the rectifying rotation R
+(R1 / R2) and the rectified projection P (P1 / P2). The right camera's ``P[0, 3]`` (Tx) is ``-fx' * B``,
+the left one's 0.
+
+Import inverts this: with ``P = K' [I | t]`` for each camera, points in the rectified frame satisfy
+``R2 X_right = R1 X_left + (t2 - t1)``, so ``R = R2^T R1`` and ``T = R2^T (t2 - t1)`` (OpenCV convention,
+``X_right = R X_left + T``, metres as in P's Tx).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from s2r.errors import FormatError
+from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
+from s2r.formats._common import (
+    as_float,
+    as_int,
+    as_matrix,
+    build_camera,
+    build_stereo,
+    check_rotation_field,
+    distortion_for,
+    provenance_for,
+    read_text,
+    read_yaml,
+    require,
+)
+from s2r.profile import Camera, StereoProfile
+from s2r.rectification import stereo_rectification
+
+__all__ = [
+    "RosCameraInfo",
+    "camera_info_to_yaml",
+    "dump_ros_pair",
+    "is_camera_info_mapping",
+    "load_ros_pair",
+    "read_camera_info",
+    "ros_pair_from_profile",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class RosCameraInfo:
+    """One ROS camera_info: image size (pixels), K (3x3), D, distortion model, R (3x3), P (3x4).
+
+    ``R`` rotates the camera's optical frame into the rectified frame; ``P = K' [I | t]`` projects
+    rectified-frame points (metres) to rectified pixels; a rectified right camera has ``P[0, 3] = -fx' B``.
+    """
+
+    camera_name: str
+    width: int
+    height: int
+    K: FloatArray
+    D: FloatArray
+    distortion_model: str
+    R: FloatArray
+    P: FloatArray
+    frame_id: str = ""
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(width, height)`` in pixels."""
+        return (self.width, self.height)
+
+
+#: Keys of the two text layouts: camera_calibration_parsers YAML, and rostopic echo (ROS 1 upper, ROS 2 lower).
+_YAML_KEYS = {"width": "image_width", "height": "image_height", "K": "camera_matrix", "D": "distortion_coefficients",
+              "model": "distortion_model", "R": "rectification_matrix", "P": "projection_matrix"}
+_ECHO_KEYS = {"width": "width", "height": "height", "K": "K", "D": "D", "model": "distortion_model", "R": "R",
+              "P": "P"}
+
+
+def is_camera_info_mapping(data: Any) -> bool:
+    """True when ``data`` looks like a camera_info (either the parsers' YAML or rostopic echo)."""
+    if not isinstance(data, dict):
+        return False
+    keys = {str(k) for k in data}
+    return "camera_matrix" in keys or ({"K", "P"} <= keys) or ({"k", "p"} <= keys)
+
+
+def _echo_documents(text: str) -> str:
+    """The first non-empty document of ``rostopic echo`` output (messages are separated by ``---``)."""
+    docs: list[list[str]] = [[]]
+    for line in text.splitlines():
+        if line.strip() == "---":
+            docs.append([])
+        else:
+            docs[-1].append(line)
+    for doc in docs:
+        if any(line.strip() and not line.lstrip().startswith("#") for line in doc):
+            return "\n".join(doc)
+    return ""
+
+
+def _parse_mapping(text: str, path: Path) -> dict[Any, Any]:
+    data = read_yaml(_echo_documents(text), path)
+    if not isinstance(data, dict):
+        raise FormatError("expected a camera_info mapping (image_width, camera_matrix, ... or K:, P:)", path=path,
+                          hint="pass a camera_calibration_parsers YAML or saved `rostopic echo` output")
+    return data
+
+
+def _matrix_field(data: dict[Any, Any], key: str, shape: tuple[int, int], path: Path) -> FloatArray:
+    value = require(data, key, path)
+    if isinstance(value, dict):  # the parsers' layout {rows, cols, data}
+        rows = as_int(require(value, "rows", path, prefix=f"{key}."), path, f"{key}.rows")
+        cols = as_int(require(value, "cols", path, prefix=f"{key}."), path, f"{key}.cols")
+        if (rows, cols) != shape:
+            raise FormatError(f"expected rows {shape[0]} cols {shape[1]}, got {rows} x {cols}", path=path, field=key)
+        value = require(value, "data", path, prefix=f"{key}.")
+    return as_matrix(value, shape, path, key)
+
+
+def _coefficients(data: dict[Any, Any], key: str, path: Path) -> list[float]:
+    value = require(data, key, path)
+    if isinstance(value, dict):
+        value = require(value, "data", path, prefix=f"{key}.")
+    if value is None:
+        return []
+    if not isinstance(value, (list, tuple)):
+        raise FormatError(f"expected a list of numbers, got {type(value).__name__}", path=path, field=key)
+    return [as_float(v, path, key) for v in value]
+
+
+def _lower_keys(data: dict[Any, Any]) -> dict[Any, Any]:
+    """ROS 2 echo prints k, d, r, p: map them to the ROS 1 names."""
+    upper = {"k": "K", "d": "D", "r": "R", "p": "P"}
+    return {upper.get(k, k) if isinstance(k, str) else k: v for k, v in data.items()}
+
+
+def read_camera_info(path: str | Path) -> RosCameraInfo:
+    """Read one camera_info: a camera_calibration_parsers YAML file or saved ``rostopic echo`` text.
+
+    Raises:
+        FormatError: naming the file and the field (missing, not a number, wrong count, zero focal
+            length, principal point outside the image, R not a rotation, NaN/inf, unknown model).
+    """
+    source = Path(path)
+    data = _parse_mapping(read_text(source), source)
+    keys = _YAML_KEYS if "camera_matrix" in data else _ECHO_KEYS
+    if keys is _ECHO_KEYS:
+        data = _lower_keys(data)
+    width = as_int(require(data, keys["width"], source), source, keys["width"])
+    height = as_int(require(data, keys["height"], source), source, keys["height"])
+    K = _matrix_field(data, keys["K"], (3, 3), source)
+    model = require(data, keys["model"], source)
+    if not isinstance(model, str):
+        raise FormatError(f"expected a model name, got {type(model).__name__}", path=source, field=keys["model"])
+    coeffs = _coefficients(data, keys["D"], source)
+    distortion = distortion_for(model, coeffs, source, keys["D"])
+    R = check_rotation_field(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"])
+    P = _matrix_field(data, keys["P"], (3, 4), source)
+    build_camera(K=K, size=(width, height), distortion=distortion, path=source, field=keys["K"])
+    header = data.get("header")
+    frame_id = header.get("frame_id", "") if isinstance(header, dict) else ""
+    name = data.get("camera_name", "")
+    return RosCameraInfo(
+        camera_name=name if isinstance(name, str) else str(name), width=width, height=height, K=K,
+        D=np.array(distortion.coefficients, dtype=np.float64), distortion_model=model, R=R, P=P,
+        frame_id=frame_id if isinstance(frame_id, str) else str(frame_id),
+    )
+
+
+def _rectified_offset(info: RosCameraInfo, path: Path, field: str) -> FloatArray:
+    """``t`` in ``P = K' [I | t]`` (metres, rectified frame)."""
+    k_rect = info.P[:, :3]
+    if abs(float(np.linalg.det(k_rect))) < 1e-12 or k_rect[0, 0] <= 0:
+        raise FormatError("left 3x3 block of P is singular; cannot recover the extrinsics", path=path, field=field,
+                          hint="export camera_info from a calibrated stereo pair")
+    return np.asarray(np.linalg.solve(k_rect, info.P[:, 3]), dtype=np.float64)
+
+
+def _camera(info: RosCameraInfo, path: Path) -> Camera:
+    distortion = distortion_for(info.distortion_model, info.D.tolist(), path, "distortion_coefficients")
+    return build_camera(K=info.K, size=info.image_size, distortion=distortion, path=path, field="camera_matrix",
+                        frame_id=info.frame_id)
+
+
+def load_ros_pair(
+    left_path: str | Path, right_path: str | Path, *, name: str | None = None, origin: str = "real"
+) -> StereoProfile:
+    """A stereo profile from two camera_info files (parsers YAML or rostopic echo text, in any mix).
+
+    ``R = R2^T R1`` and ``T = R2^T (t2 - t1)`` with ``t = K'^-1 P[:, 3]`` (see the module docstring).
+    """
+    lpath, rpath = Path(left_path), Path(right_path)
+    left, right = read_camera_info(lpath), read_camera_info(rpath)
+    if left.image_size != right.image_size:
+        raise FormatError(
+            f"image size {right.width}x{right.height} differs from {left.width}x{left.height} in {lpath}",
+            path=rpath, field="image_width/image_height", hint="pass the two camera_info files of one stereo pair",
+        )
+    t_left = _rectified_offset(left, lpath, "projection_matrix")
+    t_right = _rectified_offset(right, rpath, "projection_matrix")
+    R = right.R.T @ left.R
+    T = right.R.T @ (t_right - t_left)
+    if float(np.linalg.norm(T)) < 1e-6:
+        raise FormatError("P[0,3] (Tx) is 0 in both files: no baseline between the cameras", path=rpath,
+                          field="projection_matrix", hint="the right camera's Tx must be -fx' * baseline; "
+                          "pass the left file first and the right file second")
+    base = name or (left.camera_name.split("/")[0] if left.camera_name else lpath.parent.name or lpath.stem)
+    return build_stereo(
+        name=base, left=_camera(left, lpath), right=_camera(right, rpath), R=R, T=T, path=rpath,
+        provenance=provenance_for([lpath, rpath], "ROS camera_info", origin=origin),
+        description=f"imported from ROS camera_info {lpath.name} + {rpath.name}",
+    )
+
+
+def ros_pair_from_profile(profile: StereoProfile, *, alpha: float = 0.0) -> tuple[RosCameraInfo, RosCameraInfo]:
+    """The left and right camera_info of a profile's rectified pair (``alpha`` as in stereoRectify)."""
+    rect = stereo_rectification(profile, alpha=alpha)
+    infos = []
+    for side, cam, R, P in (("left", profile.left, rect.R1, rect.P1), ("right", profile.right, rect.R2, rect.P2)):
+        infos.append(RosCameraInfo(
+            camera_name=f"{profile.name}/{side}", width=cam.width_px, height=cam.height_px, K=cam.K, D=cam.D,
+            distortion_model=cam.distortion.model, R=R, P=P, frame_id=cam.frame_id,
+        ))
+    return infos[0], infos[1]
+
+
+def _matrix_block(array: FloatArray) -> dict[str, Any]:
+    rows, cols = (1, array.size) if array.ndim == 1 else array.shape
+    return {"rows": int(rows), "cols": int(cols), "data": [float(v) for v in array.reshape(-1)]}
+
+
+def camera_info_to_yaml(info: RosCameraInfo) -> str:
+    """The camera_calibration_parsers YAML text of ``info`` (numbers at full float precision)."""
+    data = {
+        "image_width": info.width, "image_height": info.height, "camera_name": info.camera_name,
+        "camera_matrix": _matrix_block(info.K), "distortion_model": info.distortion_model,
+        "distortion_coefficients": _matrix_block(info.D), "rectification_matrix": _matrix_block(info.R),
+        "projection_matrix": _matrix_block(info.P),
+    }
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=1000)
+
+
+def dump_ros_pair(
+    profile: StereoProfile, folder: str | Path, *, force: bool = False, alpha: float = 0.0
+) -> tuple[Path, Path]:
+    """Write ``left.yaml`` and ``right.yaml`` (rectified camera_info) into ``folder``; refuse to overwrite."""
+    out = Path(folder)
+    targets = (out / "left.yaml", out / "right.yaml")
+    for target in targets:
+        check_output_free(target, force=force)
+    prepare_output_dir(out, force=True)
+    left, right = ros_pair_from_profile(profile, alpha=alpha)
+    atomic_write_text(targets[0], camera_info_to_yaml(left), force=force)
+    atomic_write_text(targets[1], camera_info_to_yaml(right), force=force)
+    return targets
