@@ -186,9 +186,9 @@ class StereoPipeline:
             elif stage == "speckle":
                 raw = pp.speckle(raw, invalid=invalid, window_px=geo.config.speckle_window_size)
             elif stage == "median":
-                raw = pp.median(raw)
+                raw = pp.median(raw, invalid=invalid)
             elif stage == "close":
-                raw = pp.close(raw)
+                raw = pp.close(raw, invalid=invalid)
             else:
                 raw = pp.fill_background(raw, invalid=invalid)
         return raw

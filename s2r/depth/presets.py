@@ -27,9 +27,9 @@ PRESETS: tuple[str, ...] = ("profile", "seed-sgbm", "fast", "bm", "ros-default")
 
 #: Post-processing each preset applies when the caller gives none (names from s2r.depth.postprocess).
 DEFAULT_POSTPROCESS: dict[str, tuple[str, ...]] = {
-    "profile": ("lr-check", "median"),
+    "profile": ("lr-check", "speckle", "median"),
     "seed-sgbm": ("median", "close"),  # the seed: medianBlur 5, then a 3x3 morphological close
-    "fast": (),
+    "fast": ("median",),
     "bm": (),
     "ros-default": (),
 }
