@@ -1,0 +1,113 @@
+"""What to change: concrete edits that make the sim camera match the real one.
+
+The edits are phrased for a Gazebo camera sensor in a robot description (``<image><width>``,
+``<horizontal_fov>``, the right camera's joint ``<origin>``, ``<distortion>``), because that is where a sim
+profile comes from; ``s2r profile export-gazebo REAL`` writes the sensor XML with all of them.
+
+Frames: the joint origin is the pose of the right camera LINK in the left camera link (ROS link frames: x
+forward, y left, z up), derived from the real profile's OpenCV extrinsics through the optical frame
+(``T_link_optical``, rpy = (-pi/2, 0, -pi/2)).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
+from s2r.profile import StereoProfile
+from s2r.validate.params import ParamRow
+
+__all__ = ["Edit", "gazebo_hfov_rad", "right_joint_origin", "suggest_edits"]
+
+
+@dataclass(frozen=True)
+class Edit:
+    """One change to the sim description: what, from which value, to which, and where to write it."""
+
+    parameter: str
+    current: str
+    target: str
+    where: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain mapping for JSON."""
+        return asdict(self)
+
+
+def gazebo_hfov_rad(profile: StereoProfile) -> float:
+    """The ``<horizontal_fov>`` (radians) that makes Gazebo publish the profile's fx at its width.
+
+    Gazebo sets ``fx = W / (2 tan(hfov / 2))``, so ``hfov = 2 atan(W / (2 fx))``.
+    """
+    return 2.0 * math.atan(profile.left.width_px / (2.0 * profile.left.fx_px))
+
+
+def right_joint_origin(profile: StereoProfile) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """``(xyz metres, rpy radians)`` of the right camera link in the left camera link (URDF joint origin)."""
+    T_lopt_ropt = pose_from_opencv_extrinsics(profile.R, profile.T)
+    T_llink_rlink = T_LINK_OPTICAL @ T_lopt_ropt @ invert_transform(T_LINK_OPTICAL)
+    xyz = tuple(float(v) + 0.0 for v in np.round(T_llink_rlink[:3, 3], 6))
+    rpy = tuple(float(v) + 0.0 for v in np.round(rpy_from_rotation(T_llink_rlink[:3, :3]), 6))
+    return xyz, rpy  # type: ignore[return-value]
+
+
+def _fmt(values: tuple[float, ...]) -> str:
+    return " ".join(f"{v:g}" for v in values)
+
+
+def _failed(rows: list[ParamRow], *names: str) -> bool:
+    return any(r.exceeds_tolerance for r in rows if r.name in names)
+
+
+def _intrinsic_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow], *,
+                     principal_point_px: float) -> list[Edit]:
+    edits = []
+    if _failed(rows, "image size"):
+        edits.append(Edit("resolution", f"{sim.image_size[0]}x{sim.image_size[1]}",
+                          f"{real.image_size[0]}x{real.image_size[1]}",
+                          f"<image><width>{real.image_size[0]}</width><height>{real.image_size[1]}</height> "
+                          "in both camera sensors"))
+    if _failed(rows, "HFOV", "left fx", "right fx", "image size"):
+        hfov = gazebo_hfov_rad(real)
+        edits.append(Edit("horizontal_fov", f"{gazebo_hfov_rad(sim):.4f} rad", f"{hfov:.4f} rad "
+                          f"({math.degrees(hfov):.2f} deg)", "<horizontal_fov> in both camera sensors"))
+    if _failed(rows, "left fy", "VFOV") and abs(real.left.fy_px - real.left.fx_px) > 1e-6 * real.left.fx_px:
+        edits.append(Edit("fy", f"{sim.left.fy_px:.2f} px", f"{real.left.fy_px:.2f} px",
+                          "Gazebo classic ties fy to fx; set gz-sim <lens><intrinsics><fy>"))
+    w, h = real.image_size
+    off_centre = max(abs(real.left.cx_px - (w - 1) / 2.0), abs(real.left.cy_px - (h - 1) / 2.0))
+    if _failed(rows, "left cx", "left cy", "right cx", "right cy") and off_centre > principal_point_px:
+        edits.append(Edit("principal point", f"({sim.left.cx_px:.2f}, {sim.left.cy_px:.2f}) px",
+                          f"({real.left.cx_px:.2f}, {real.left.cy_px:.2f}) px (OpenCV 0-based)",
+                          "gz-sim <lens><intrinsics><cx>/<cy> (Gazebo classic always centres it)"))
+    if _failed(rows, "left distortion", "right distortion"):
+        edits.append(Edit("distortion", sim.left.distortion.model + " " + _fmt(sim.left.distortion.coefficients),
+                          real.left.distortion.model + " " + _fmt(real.left.distortion.coefficients),
+                          "<distortion> k1 k2 p1 p2 k3 (Gazebo's k are image-size normalised: let "
+                          "s2r profile export-gazebo convert them)"))
+    return edits
+
+
+def suggest_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow], *,
+                  principal_point_px: float = 2.0) -> list[Edit]:
+    """The edits to the sim description that remove each parameter difference beyond tolerance.
+
+    A principal-point edit is suggested only when the real principal point lies more than
+    ``principal_point_px`` from the image centre (a sim camera at the real resolution is centred).
+    """
+    edits = _intrinsic_edits(sim, real, rows, principal_point_px=principal_point_px)
+    if _failed(rows, "baseline", "inter-camera rotation"):
+        (xyz_s, rpy_s), (xyz_r, rpy_r) = right_joint_origin(sim), right_joint_origin(real)
+        edits.append(Edit("right camera joint origin", f'xyz="{_fmt(xyz_s)}" rpy="{_fmt(rpy_s)}"',
+                          f'xyz="{_fmt(xyz_r)}" rpy="{_fmt(rpy_r)}"',
+                          "<origin> of the joint from the left to the right camera link (baseline "
+                          f"{sim.baseline_m * 1000:.1f} -> {real.baseline_m * 1000:.1f} mm); multicamera "
+                          f"plugin <hackBaseline>{real.baseline_m:g}</hackBaseline>"))
+    if edits:
+        edits.append(Edit("all of the above", sim.name, real.name,
+                          f"s2r profile export-gazebo {real.name} writes the matching sensor XML"))
+    return edits

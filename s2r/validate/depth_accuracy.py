@@ -1,0 +1,172 @@
+"""Depth accuracy: render ground-truth scenes through a profile, run the depth pipeline, score by distance.
+
+Errors are relative: ``(estimate - truth) / truth`` per pixel of the RECTIFIED left image, against the
+renderer's ground-truth depth in that same image (``SceneFrame.depth_rect_m``). Pixels count only where the
+truth is finite and the point is visible in the right image too (``x - d_truth >= 0``); the fill rate is the
+share of those the pipeline returns a depth for.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.profile import StereoProfile
+from s2r.validate.resolution import theory_rel_rms
+
+__all__ = ["DEFAULT_BINS_M", "BinStats", "DepthAccuracy", "DepthSamples", "bin_stats", "measure_depth_accuracy",
+           "pixel_errors", "within_stats"]
+
+#: Distance bins (metres): [lo, hi), the last one closed.
+DEFAULT_BINS_M: tuple[tuple[float, float], ...] = ((0.5, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 5.0))
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class BinStats:
+    """Depth errors of the pixels whose true depth lies in [lo_m, hi_m).
+
+    Percentages are of the true depth: ``median_pct``/``p90_pct`` of the absolute relative error, ``bias_pct``
+    the median signed relative error; ``fill_rate`` valid estimates / scored pixels; ``theory_lo_pct`` and
+    ``theory_hi_pct`` Intel's theoretical RMS at the bin's ends (``None`` without a profile).
+    """
+
+    lo_m: float
+    hi_m: float
+    pixels: int
+    valid: int
+    fill_rate: float | None
+    median_pct: float | None
+    p90_pct: float | None
+    bias_pct: float | None
+    theory_lo_pct: float | None = None
+    theory_hi_pct: float | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain mapping for JSON."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class DepthSamples:
+    """Images of one frame for the report: rendered left (BGR uint8), rectified left, estimated and true
+    depth (float32 metres, rectified left image, NaN invalid)."""
+
+    name: str
+    left: NDArray[np.uint8]
+    rect_left: NDArray[np.uint8]
+    depth_m: NDArray[np.float32]
+    truth_m: NDArray[np.float32]
+
+
+@dataclass(frozen=True)
+class DepthAccuracy:
+    """Depth accuracy of one profile with one preset over the rendered scenes."""
+
+    profile: str
+    preset: str
+    scenes: tuple[str, ...]
+    distances_m: tuple[float, ...]
+    bins: list[BinStats]
+    within_3m: BinStats
+    samples: DepthSamples | None = None
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain mapping for JSON (without the sample images)."""
+        return {"profile": self.profile, "preset": self.preset, "scenes": list(self.scenes),
+                "distances_m": list(self.distances_m), "bins": [b.as_dict() for b in self.bins],
+                "within_3m": self.within_3m.as_dict(), "seconds": self.seconds}
+
+
+def pixel_errors(depth_m: NDArray[Any], truth_m: NDArray[Any], disparity_truth_px: NDArray[Any] | None = None
+                 ) -> tuple[FloatArray, FloatArray]:
+    """``(truth, relative error)`` of the scored pixels (finite truth, visible in both images), shape (N,).
+
+    The relative error is NaN where the estimate is missing (NaN or non-positive).
+    """
+    truth = np.asarray(truth_m, dtype=np.float64)
+    est = np.asarray(depth_m, dtype=np.float64)
+    if est.shape != truth.shape:
+        raise ValueError(f"depth {est.shape} and truth {truth.shape} must have the same shape")
+    scored = np.isfinite(truth) & (truth > 0)
+    if disparity_truth_px is not None:
+        cols = np.arange(truth.shape[1], dtype=np.float64)[None, :]
+        scored &= (cols - np.nan_to_num(np.asarray(disparity_truth_px, np.float64), nan=np.inf)) >= 0
+    t = truth[scored]
+    e = est[scored]
+    rel = np.where(np.isfinite(e) & (e > 0), (e - t) / t, np.nan)
+    return t, rel
+
+
+def _stats(lo: float, hi: float, rel: FloatArray, profile: StereoProfile | None) -> BinStats:
+    valid = rel[np.isfinite(rel)]
+    n, k = int(rel.size), int(valid.size)
+    theory = (None, None) if profile is None else (100 * theory_rel_rms(profile, lo), 100 * theory_rel_rms(profile, hi))
+    if k == 0:
+        return BinStats(lo, hi, n, k, k / n if n else None, None, None, None, *theory)
+    absolute = np.abs(valid) * 100
+    return BinStats(lo, hi, n, k, k / n, float(np.median(absolute)), float(np.percentile(absolute, 90)),
+                    float(np.median(valid) * 100), *theory)
+
+
+def bin_stats(truth: FloatArray, rel: FloatArray, bins: Sequence[tuple[float, float]], *,
+              profile: StereoProfile | None = None) -> list[BinStats]:
+    """Per-bin statistics of relative errors ``rel`` (NaN = missing) of pixels at true depths ``truth``."""
+    out = []
+    for i, (lo, hi) in enumerate(bins):
+        last = i == len(bins) - 1
+        mask = (truth >= lo) & ((truth <= hi) if last else (truth < hi))
+        out.append(_stats(lo, hi, rel[mask], profile))
+    return out
+
+
+def within_stats(truth: FloatArray, rel: FloatArray, max_m: float = 3.0, *,
+                 profile: StereoProfile | None = None) -> BinStats:
+    """Statistics over every scored pixel with true depth up to ``max_m`` (the seed's 'within 3 m')."""
+    lo = float(np.min(truth)) if truth.size else 0.0
+    return _stats(lo, max_m, rel[truth <= max_m], profile)
+
+
+def _middle_frame(frames: Sequence[Any]) -> int:
+    return min(range(len(frames)), key=lambda i: abs(float(np.nanmedian(frames[i].depth_rect_m)) - 1.5))
+
+
+def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile", scenes: Sequence[str] = ("planes",),
+                           distances_m: Sequence[float] = (0.5, 1.0, 2.0, 3.0, 5.0),
+                           bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M, supersample: int = 2,
+                           seed: int = 0, jobs: int | None = 1) -> DepthAccuracy:
+    """Render ``scenes`` at ``distances_m`` through ``profile``, run the depth pipeline with ``preset``, score."""
+    from s2r.depth.pipeline import StereoPipeline
+    from s2r.render.scenes import render_scene
+
+    start = time.perf_counter()
+    frames = []
+    for scene in scenes:
+        frames += render_scene(profile, scene=scene, distances_m=tuple(distances_m), supersample=supersample,
+                               seed=seed, jobs=jobs)
+    rendered = time.perf_counter()
+    pipeline = StereoPipeline(profile, preset=preset)
+    truths, rels, samples = [], [], None
+    keep = _middle_frame(frames)
+    for i, frame in enumerate(frames):
+        result = pipeline.compute(frame.left, frame.right)
+        t, r = pixel_errors(result.depth, frame.depth_rect_m, frame.disparity_rect_px)
+        truths.append(t)
+        rels.append(r)
+        if i == keep:
+            samples = DepthSamples(frame.name, frame.left, np.asarray(result.rect_left), result.depth,
+                                   frame.depth_rect_m)
+    matched = time.perf_counter()
+    truth, rel = np.concatenate(truths), np.concatenate(rels)
+    return DepthAccuracy(
+        profile=profile.name, preset=preset, scenes=tuple(scenes), distances_m=tuple(float(d) for d in distances_m),
+        bins=bin_stats(truth, rel, bins, profile=profile), within_3m=within_stats(truth, rel, 3.0, profile=profile),
+        samples=samples, seconds={"render_scenes": rendered - start, "depth_pipeline": matched - rendered},
+    )

@@ -1,0 +1,235 @@
+"""``validate``: the whole comparison of a sim profile with a real one (or one profile's self-check).
+
+Stages: parameter table, projection difference, theoretical depth resolution (instant), then for each profile
+the recovered calibration (render boards + calibrate) and the depth accuracy (render scenes + depth
+pipeline). The expensive per-profile stages run as independent tasks in parallel processes (``jobs``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+from s2r.errors import ValidateError
+from s2r.profile import StereoProfile
+from s2r.progress import ProgressCallback, report
+from s2r.validate.advice import Edit, suggest_edits
+from s2r.validate.depth_accuracy import DEFAULT_BINS_M, DepthAccuracy, measure_depth_accuracy
+from s2r.validate.params import ParamRow, parameter_table
+from s2r.validate.projection import ProjectionDiff, projection_difference
+from s2r.validate.recovery import RecoveryResult, recover_calibration
+from s2r.validate.resolution import DepthResolution, depth_resolution
+from s2r.validate.tolerances import Tolerances
+from s2r.validate.verdict import (
+    Check,
+    depth_checks,
+    depth_gap_checks,
+    parameter_checks,
+    projection_checks,
+    recovery_checks,
+)
+
+__all__ = ["FULL", "QUICK", "Settings", "ValidationResult", "check_distances", "validate"]
+
+log = logging.getLogger(__name__)
+
+#: Distances (metres) of the theoretical depth-resolution table.
+RESOLUTION_DISTANCES_M = (0.5, 1.0, 2.0, 3.0, 5.0)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How much work each stage does: board views, supersampling, scene distances (metres) and scenes."""
+
+    views: int
+    supersample: int
+    distances_m: tuple[float, ...]
+    scenes: tuple[str, ...]
+    preset: str = "profile"
+    seed: int = 0
+    bins_m: tuple[tuple[float, float], ...] = DEFAULT_BINS_M
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain mapping for JSON."""
+        return {"views": self.views, "supersample": self.supersample, "distances_m": list(self.distances_m),
+                "scenes": list(self.scenes), "preset": self.preset, "seed": self.seed,
+                "bins_m": [list(b) for b in self.bins_m]}
+
+
+#: Default settings (at most about 60 s for two profiles on 2 cores).
+FULL = Settings(views=20, supersample=2, distances_m=(0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0),
+                scenes=("planes",))
+#: ``--quick`` settings (at most about 15 s): fewer views and planes, no supersampling.
+QUICK = Settings(views=12, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0), scenes=("planes",))
+
+
+@dataclass
+class ValidationResult:
+    """Every figure of one validation run; ``roles`` maps ``sim``/``real`` (or ``profile``) to profiles."""
+
+    roles: dict[str, StereoProfile]
+    settings: Settings
+    tolerances: Tolerances
+    params: list[ParamRow] = field(default_factory=list)
+    projection: list[ProjectionDiff] = field(default_factory=list)
+    resolution: dict[str, DepthResolution] = field(default_factory=dict)
+    recovery: dict[str, RecoveryResult] = field(default_factory=dict)
+    depth: dict[str, DepthAccuracy] = field(default_factory=dict)
+    edits: list[Edit] = field(default_factory=list)
+    gazebo_xml: str | None = None
+    checks: list[Check] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def pair(self) -> bool:
+        """True for a sim-vs-real comparison, False for one profile's self-check."""
+        return "real" in self.roles
+
+    @property
+    def passed(self) -> bool:
+        """True when every check passes."""
+        return all(c.passed for c in self.checks)
+
+    @property
+    def failures(self) -> list[Check]:
+        """The failing checks, in report order."""
+        return [c for c in self.checks if not c.passed]
+
+    def as_dict(self) -> dict[str, Any]:
+        """Every figure as plain JSON-ready data."""
+        return {
+            "mode": "sim-vs-real" if self.pair else "self-check",
+            "profiles": {role: p.name for role, p in self.roles.items()},
+            "passed": self.passed, "settings": self.settings.as_dict(), "tolerances": self.tolerances.as_dict(),
+            "parameters": [r.as_dict() for r in self.params],
+            "projection": [d.as_dict() for d in self.projection],
+            "resolution": {k: v.as_dict() for k, v in self.resolution.items()},
+            "recovery": {k: v.as_dict() for k, v in self.recovery.items()},
+            "depth": {k: v.as_dict() for k, v in self.depth.items()},
+            "edits": [e.as_dict() for e in self.edits], "gazebo_xml": self.gazebo_xml,
+            "checks": [c.as_dict() for c in self.checks], "failures": [c.text for c in self.failures],
+            "seconds": self.seconds,
+        }
+
+
+def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[float]) -> None:
+    """Raise :class:`ValidateError` when the preset's disparity range cannot see every requested distance."""
+    from s2r.depth.pipeline import StereoPipeline
+
+    pipe = StereoPipeline(profile, preset=preset)
+    fb = pipe.rectification.fx_px * pipe.rectification.baseline_m
+    d_max = pipe.config.min_disparity + pipe.config.num_disparities - 1
+    nearest, farthest = fb / max(d_max, 1), fb / max(pipe.config.min_disparity, 1)
+    unseen = [d for d in distances_m if d < nearest or d > farthest]
+    if unseen:
+        raise ValidateError(
+            f"the {preset!r} matcher of profile {profile.name} ({pipe.config.num_disparities} disparities) sees "
+            f"{nearest:.2f}-{farthest:.1f} m, not {', '.join(f'{d:g}' for d in unseen)} m",
+            field="matcher", hint="lower matcher.min_depth_m / num_disparities in the profile, choose another "
+            "--preset, or pass --distances inside that range")
+
+
+def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances) -> Any:
+    if kind == "recovery":
+        return recover_calibration(profile, tol, views=settings.views, supersample=settings.supersample,
+                                   seed=settings.seed, jobs=1)
+    return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes,
+                                  distances_m=settings.distances_m, bins=settings.bins_m,
+                                  supersample=settings.supersample, seed=settings.seed, jobs=1)
+
+
+def _run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Tolerances, jobs: int,
+               progress: ProgressCallback | None) -> dict[tuple[str, str], Any]:
+    tasks = [(kind, role) for kind in ("recovery", "depth") for role in roles]
+    results: dict[tuple[str, str], Any] = {}
+    report(progress, 0, len(tasks), "validate")
+    if jobs <= 1:
+        for i, (kind, role) in enumerate(tasks):
+            results[(kind, role)] = _task(kind, roles[role], settings, tol)
+            report(progress, i + 1, len(tasks), f"{kind} {role}")
+        return results
+    with ProcessPoolExecutor(max_workers=min(jobs, len(tasks))) as pool:
+        futures: dict[Future[Any], tuple[str, str]] = {
+            pool.submit(_task, kind, roles[role], settings, tol): (kind, role) for kind, role in tasks}
+        for i, fut in enumerate(_as_completed(futures)):
+            key = futures[fut]
+            results[key] = fut.result()
+            report(progress, i + 1, len(tasks), f"{key[0]} {key[1]}")
+    return results
+
+
+def _as_completed(futures: dict[Future[Any], Any]) -> Any:
+    from concurrent.futures import as_completed
+
+    return as_completed(futures)
+
+
+def _gazebo_xml(real: StereoProfile) -> str | None:
+    try:
+        from s2r.sources.gazebo_export import export_gazebo
+    except ImportError:  # pragma: no cover - the exporter ships with s2r.sources
+        return None
+    xml, warnings = export_gazebo(real, fmt="urdf")
+    for warning in warnings:
+        log.debug("export-gazebo: %s", warning)
+    return str(xml)
+
+
+def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoProfile | None) -> None:
+    tol = result.tolerances
+    for role, profile in result.roles.items():
+        result.resolution[role] = depth_resolution(profile, RESOLUTION_DISTANCES_M)
+    if real is None:
+        return
+    result.params = parameter_table(sim, real, tol)
+    result.projection = projection_difference(sim, real, distance_m=tol.working_distance_m)
+    result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
+    if result.edits:
+        result.gazebo_xml = _gazebo_xml(real)
+
+
+def _collect_checks(result: ValidationResult) -> list[Check]:
+    tol = result.tolerances
+    checks = parameter_checks(result.params) + projection_checks(result.projection, tol)
+    for role, rec in result.recovery.items():
+        checks += recovery_checks(rec, role)
+    for role, acc in result.depth.items():
+        checks += depth_checks(acc, tol, role)
+    if result.pair:
+        checks += depth_gap_checks(result.depth["sim"], result.depth["real"], tol)
+    return checks
+
+
+def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerances: Tolerances | None = None,
+             settings: Settings = FULL, jobs: int | None = None,
+             progress: Callable[[int, int, str], None] | None = None) -> ValidationResult:
+    """Validate ``sim`` against ``real`` (or ``sim`` alone: its self-check). See the module docstring.
+
+    Raises:
+        ValidateError: a profile's matcher cannot see the requested distances.
+    """
+    tol = Tolerances() if tolerances is None else tolerances
+    roles = {"sim": sim, "real": real} if real is not None else {"profile": sim}
+    for profile in roles.values():
+        check_distances(profile, settings.preset, settings.distances_m)
+    result = ValidationResult(roles=roles, settings=settings, tolerances=tol)
+    start = time.perf_counter()
+    _static_stages(result, sim, real)
+    result.seconds["static"] = time.perf_counter() - start
+    workers = jobs if jobs is not None else (os.cpu_count() or 1)
+    outputs = _run_tasks(roles, settings, tol, workers, progress)
+    for (kind, role), value in outputs.items():
+        if kind == "recovery":
+            result.recovery[role] = value
+        else:
+            result.depth[role] = value
+        for stage, secs in value.seconds.items():
+            result.seconds[f"{stage} ({role})"] = secs
+    result.checks = _collect_checks(result)
+    result.seconds["total"] = time.perf_counter() - start
+    return result
