@@ -1,1 +1,22 @@
-"""Robot descriptions (URDF, xacro, SDF) to sim profiles, lint, and export back to Gazebo."""
+"""Robot descriptions (URDF, xacro, SDF) to sim profiles, lint, and export back to Gazebo.
+
+- :func:`load_description_profile`: a sim :class:`~s2r.profile.StereoProfile` from a description.
+- :func:`lint_description`: findings about a description's stereo pair (``s2r lint``).
+- :func:`export_gazebo`: Gazebo sensor XML that makes a simulated camera match a profile.
+"""
+
+from __future__ import annotations
+
+from s2r.sources.conventions import CONVENTIONS, gazebo_to_opencv_distortion, opencv_to_gazebo_distortion
+from s2r.sources.loader import load_description, select_pair, stereo_pair
+from s2r.sources.profile_builder import load_description_profile
+
+__all__ = [
+    "CONVENTIONS",
+    "gazebo_to_opencv_distortion",
+    "load_description",
+    "load_description_profile",
+    "opencv_to_gazebo_distortion",
+    "select_pair",
+    "stereo_pair",
+]

@@ -1,0 +1,146 @@
+"""Gazebo camera conventions: intrinsics from ``horizontal_fov`` and Gazebo's distortion units.
+
+Intrinsics (REFERENCE.md), W x H pixels, ``f = W / (2 tan(hfov / 2))`` in every convention:
+
+- ``gazebo-classic`` (gazebo_ros camera plugins): fx = fy = f, cx = (W + 1) / 2, cy = (H + 1) / 2.
+- ``gz-sim``: fx = fy = f, cx = W / 2, cy = H / 2, unless ``<lens><intrinsics>`` gives fx, fy, cx, cy, s.
+- ``exact``: fx = fy = f, cx = (W - 1) / 2, cy = (H - 1) / 2: the true centre of the rendered image in
+  OpenCV's 0-based pixel-centre convention.
+
+A centred render therefore *publishes* a principal point :data:`CENTRE_OFFSET_PX` pixels right of and
+below the exact one; the profile records which convention its numbers follow.
+
+Distortion (gazebo-classic issue 3003): Gazebo applies Brown's model to texture coordinates, i.e. to
+``x_n = (u - c_u) / W`` and ``y_n = (v - c_v) / H`` (image-size-normalised, per axis), while OpenCV
+applies it to focal-normalised ``x = (u - cx) / fx``, ``y = (v - cy) / fy``. With ``a = fx / W = fy / H``
+(square pixels AND a square image, or matching aspect) the conversion is exact:
+``k1_cv = k1_gz a^2``, ``k2_cv = k2_gz a^4``, ``k3_cv = k3_gz a^6``, ``p_cv = p_gz a``. Otherwise no
+5-term OpenCV model equals Gazebo's, so both directions here are linear least-squares fits of the
+pixel displacement over the image (both models are linear in their coefficients) and report the
+residual in pixels: that residual is the documented limit of the conversion.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from s2r.errors import SourceError
+from s2r.sources.description import FloatArray, LensIntrinsics
+
+__all__ = [
+    "CENTRE_OFFSET_PX",
+    "CONVENTIONS",
+    "DistortionFit",
+    "Intrinsics",
+    "check_convention",
+    "focal_from_hfov",
+    "gazebo_to_opencv_distortion",
+    "hfov_from_focal",
+    "intrinsics_for",
+    "opencv_to_gazebo_distortion",
+]
+
+CONVENTIONS = ("gazebo-classic", "gz-sim", "exact")
+#: Published principal point of a centred render minus the exact centre ((W - 1) / 2), pixels.
+CENTRE_OFFSET_PX: dict[str, float] = {"gazebo-classic": 1.0, "gz-sim": 0.5, "exact": 0.0, "opencv": 0.0}
+
+
+class Intrinsics(NamedTuple):
+    """Pinhole intrinsics in pixels (in the convention they were computed for)."""
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    skew: float = 0.0
+
+
+class DistortionFit(NamedTuple):
+    """Converted coefficients and how far the converted model is from the original, in pixels."""
+
+    coefficients: tuple[float, float, float, float, float]
+    rms_px: float
+    max_px: float
+
+
+def check_convention(convention: str) -> str:
+    """Return ``convention`` if known; SourceError listing the known ones otherwise."""
+    if convention not in CONVENTIONS:
+        raise SourceError(f"unknown convention {convention!r}", field="--convention",
+                          hint=f"use one of {', '.join(CONVENTIONS)}")
+    return convention
+
+
+def focal_from_hfov(width_px: int, hfov_rad: float) -> float:
+    """Focal length in pixels of a ``width_px`` wide image with horizontal FOV ``hfov_rad``."""
+    return width_px / (2.0 * math.tan(hfov_rad / 2.0))
+
+
+def hfov_from_focal(width_px: int, fx_px: float) -> float:
+    """Exact inverse of :func:`focal_from_hfov`: ``2 atan(W / (2 fx))`` radians."""
+    return 2.0 * math.atan(width_px / (2.0 * fx_px))
+
+
+def intrinsics_for(width_px: int, height_px: int, hfov_rad: float, convention: str,
+                   lens: LensIntrinsics | None = None) -> Intrinsics:
+    """Intrinsics a camera of this size and FOV has in ``convention`` (``<lens><intrinsics>`` used by gz-sim)."""
+    check_convention(convention)
+    if convention == "gz-sim" and lens is not None:
+        return Intrinsics(lens.fx, lens.fy, lens.cx, lens.cy, lens.s)
+    f = focal_from_hfov(width_px, hfov_rad)
+    offset = CENTRE_OFFSET_PX[convention]
+    return Intrinsics(f, f, (width_px - 1) / 2.0 + offset, (height_px - 1) / 2.0 + offset)
+
+
+def _grid(width: int, height: int, steps: int = 24) -> tuple[FloatArray, FloatArray]:
+    """Pixel offsets from the exact image centre on a grid covering the whole image."""
+    u = np.linspace(0.0, width - 1.0, steps + 1) - (width - 1) / 2.0
+    v = np.linspace(0.0, height - 1.0, steps + 1) - (height - 1) / 2.0
+    du, dv = np.meshgrid(u, v)
+    return du.ravel(), dv.ravel()
+
+
+def _design(x: FloatArray, y: FloatArray, sx: float, sy: float) -> FloatArray:
+    """Pixel displacement per unit coefficient, columns (k1, k2, k3, p1, p2), rows u then v."""
+    r2 = x * x + y * y
+    cols_u = [x * r2, x * r2**2, x * r2**3, 2 * x * y, r2 + 2 * x * x]
+    cols_v = [y * r2, y * r2**2, y * r2**3, r2 + 2 * y * y, 2 * x * y]
+    return np.vstack([np.column_stack(cols_u) * sx, np.column_stack(cols_v) * sy])
+
+
+def _models(width: int, height: int, fx: float, fy: float,
+            center: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
+    du, dv = _grid(width, height)
+    a_cv = _design(du / fx, dv / fy, fx, fy)
+    xn, yn = du / width + 0.5 - center[0], dv / height + 0.5 - center[1]
+    return a_cv, _design(xn, yn, float(width), float(height))
+
+
+def _fit(source: FloatArray, target: FloatArray, coeffs: FloatArray) -> tuple[FloatArray, float, float]:
+    wanted = source @ coeffs
+    solved = np.asarray(np.linalg.lstsq(target, wanted, rcond=None)[0], dtype=np.float64)
+    diff = (target @ solved - wanted).reshape(2, -1)
+    err = np.hypot(diff[0], diff[1])
+    return solved, float(np.sqrt(np.mean(err**2))), float(np.max(err))
+
+
+def gazebo_to_opencv_distortion(k1: float, k2: float, k3: float, p1: float, p2: float, *, width: int, height: int,
+                                fx: float, fy: float, center: tuple[float, float] = (0.5, 0.5)) -> DistortionFit:
+    """OpenCV plumb_bob ``(k1, k2, p1, p2, k3)`` closest to Gazebo's ``<distortion>`` on a W x H image."""
+    a_cv, a_gz = _models(width, height, fx, fy, center)
+    solved, rms, worst = _fit(a_gz, a_cv, np.array([k1, k2, k3, p1, p2]))
+    c = [float(v) for v in solved]
+    return DistortionFit((c[0], c[1], c[3], c[4], c[2]), rms, worst)
+
+
+def opencv_to_gazebo_distortion(coefficients: tuple[float, ...], *, width: int, height: int, fx: float,
+                                fy: float) -> DistortionFit:
+    """Gazebo ``(k1, k2, k3, p1, p2)`` (centre 0.5 0.5) closest to OpenCV plumb_bob ``(k1, k2, p1, p2, k3)``."""
+    k1, k2, p1, p2, k3 = (tuple(coefficients) + (0.0,) * 5)[:5]
+    a_cv, a_gz = _models(width, height, fx, fy, (0.5, 0.5))
+    solved, rms, worst = _fit(a_cv, a_gz, np.array([k1, k2, k3, p1, p2]))
+    c = [float(v) for v in solved]
+    return DistortionFit((c[0], c[1], c[2], c[3], c[4]), rms, worst)

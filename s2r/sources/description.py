@@ -1,0 +1,151 @@
+"""What s2r reads from a robot description: links, joints and camera sensors, with source lines.
+
+Poses are 4x4 transforms in metres named ``T_a_b`` (pose of frame ``b`` in frame ``a``). A Gazebo camera
+frame looks along its +x axis (image right = -y, image down = -z); its optical frame is that frame
+rotated by rpy (-pi/2, 0, -pi/2) (:data:`s2r.geometry.R_LINK_OPTICAL`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec"]
+
+FloatArray = NDArray[np.float64]
+#: Joint types that move; the path through them is evaluated at joint position zero.
+MOVABLE_JOINTS = frozenset({"revolute", "continuous", "prismatic", "planar", "floating", "ball", "universal",
+                            "revolute2", "screw", "gearbox"})
+#: Link-name endings that mark a link as an optical frame already (z forward, x right, y down).
+OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
+
+
+@dataclass(frozen=True)
+class LensIntrinsics:
+    """``<lens><intrinsics>`` (gz-sim): focal lengths, principal point and skew in pixels."""
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    s: float = 0.0
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class GazeboDistortion:
+    """``<distortion>`` of a camera: Brown coefficients in Gazebo's image-size-normalised units and the
+    distortion centre in texture coordinates (0.5, 0.5 = image centre)."""
+
+    k1: float = 0.0
+    k2: float = 0.0
+    k3: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
+    center: tuple[float, float] = (0.5, 0.5)
+    line: int | None = None
+
+    @property
+    def is_zero(self) -> bool:
+        """True when no coefficient is set."""
+        return not any((self.k1, self.k2, self.k3, self.p1, self.p2))
+
+
+@dataclass(frozen=True)
+class NoiseSpec:
+    """Image ``<noise>``: type, mean and standard deviation on intensities in [0, 1]."""
+
+    type: str
+    mean: float
+    stddev: float
+
+
+@dataclass(frozen=True)
+class PluginSpec:
+    """A ROS camera plugin attached to a sensor (gazebo_ros camera / multicamera)."""
+
+    filename: str
+    hack_baseline: float | None = None
+    hack_baseline_line: int | None = None
+    focal_length: float | None = None
+    focal_length_line: int | None = None
+    frame_name: str | None = None
+    camera_name: str | None = None
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """One camera of a sensor (a multicamera sensor has several), as written in the description.
+
+    ``T_link_camera`` is the pose (metres) of the Gazebo camera frame (+x forward) in its link's frame:
+    the sensor ``<pose>`` composed with the camera's own ``<pose>``.
+    """
+
+    name: str
+    sensor_name: str
+    camera_name: str
+    sensor_type: str
+    link: str
+    T_link_camera: FloatArray
+    width: int
+    height: int
+    hfov_rad: float
+    clip_near_m: float | None
+    clip_far_m: float | None
+    update_rate_hz: float | None
+    distortion: GazeboDistortion | None
+    noise: NoiseSpec | None
+    lens: LensIntrinsics | None
+    plugin: PluginSpec | None
+    T_link_sensor: FloatArray | None = None
+    index_in_sensor: int = 0
+    cameras_in_sensor: int = 1
+    lines: dict[str, int | None] = field(default_factory=dict)
+
+    @property
+    def link_is_optical(self) -> bool:
+        """True when the camera's link is named as an optical frame (``*_optical``, ``*_optical_frame``)."""
+        return self.link.endswith(OPTICAL_SUFFIXES)
+
+    def matches(self, query: str) -> bool:
+        """Whether ``query`` names this camera: its full name, camera name, sensor name or link."""
+        names = {self.name, self.link}
+        if self.cameras_in_sensor == 1:
+            names.add(self.sensor_name)
+        if self.camera_name:
+            names.add(self.camera_name)
+        return query in names
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A joint: ``T_parent_child`` is the child link's pose in the parent link at joint position zero."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    T_parent_child: FloatArray
+    line: int | None = None
+
+    @property
+    def movable(self) -> bool:
+        """True for joints that move (their zero position is used)."""
+        return self.type in MOVABLE_JOINTS
+
+
+@dataclass
+class Description:
+    """A parsed robot description: links (with source lines), joints and cameras."""
+
+    path: Path
+    kind: str
+    links: dict[str, int | None]
+    joints: list[JointSpec]
+    cameras: list[CameraSpec]
+    expanded_text: str = ""
+    source_text: str = ""

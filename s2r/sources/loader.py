@@ -1,0 +1,141 @@
+"""Read a robot description (URDF, xacro, SDF) and pick its stereo pair; the optical-frame geometry."""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from s2r.errors import SourceError
+from s2r.geometry import T_LINK_OPTICAL, invert_transform
+from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
+from s2r.sources.kinematics import KinematicTree
+from s2r.sources.sdf import parse_sdf
+from s2r.sources.urdf import parse_urdf
+from s2r.sources.xacro_expand import expand_xacro, is_xacro
+from s2r.sources.xmlparse import parse_xml
+
+__all__ = ["StereoPair", "load_description", "optical_pose", "select_pair", "stereo_pair"]
+
+logger = logging.getLogger(__name__)
+_NO_CAMERA_HINT = ("add a <sensor type='camera'> inside <gazebo reference='LINK'> (URDF) or inside a <link> (SDF)")
+
+
+@dataclass(frozen=True)
+class StereoPair:
+    """The chosen cameras and ``T_left_right``: the right OPTICAL frame's pose in the left one (metres)."""
+
+    left: CameraSpec
+    right: CameraSpec
+    T_left_right: FloatArray
+    movable_joints: tuple[JointSpec, ...]
+
+
+def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None = None,
+                     package_paths: Sequence[Path] = ()) -> Description:
+    """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
+
+    Raises:
+        SourceError: missing file, xacro failure, malformed XML, unknown root element, missing links.
+    """
+    source = Path(path)
+    if not source.is_file():
+        raise SourceError("file not found", path=source, hint="check the path")
+    try:
+        text = source.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SourceError(f"cannot read: {exc}", path=source) from None
+    expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if is_xacro(source) else text
+    doc = parse_xml(expanded, source)
+    if doc.root.tag == "robot":
+        description = parse_urdf(doc)
+    elif doc.root.tag in ("sdf", "model", "world"):
+        description = parse_sdf(doc)
+    else:
+        raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
+                          hint="expected a URDF <robot> or an <sdf> document")
+    description.source_text, description.expanded_text = text, expanded
+    return description
+
+
+def _pick(description: Description, query: str, option: str) -> CameraSpec:
+    found = [c for c in description.cameras if c.matches(query)]
+    names = ", ".join(c.name for c in description.cameras)
+    if not found:
+        raise SourceError(f"no camera named {query!r}; cameras: {names}", path=description.path, field=option,
+                          hint=f"pass {option} with one of the listed names")
+    if len(found) > 1:
+        raise SourceError(f"{query!r} names {len(found)} cameras ({', '.join(c.name for c in found)})",
+                          path=description.path, field=option, hint="use the full sensor/camera name")
+    return found[0]
+
+
+def _side(camera: CameraSpec) -> str | None:
+    text = " ".join((camera.camera_name, camera.sensor_name, camera.link)).lower()
+    has_left, has_right = bool(re.search("left", text)), bool(re.search("right", text))
+    return "left" if has_left and not has_right else "right" if has_right and not has_left else None
+
+
+def select_pair(description: Description, *, left: str | None = None,
+                right: str | None = None) -> tuple[CameraSpec, CameraSpec]:
+    """The (left, right) cameras: by name when given, else the only two cameras of the description.
+
+    Without names, two cameras are ordered by their names (``left``/``right``) or else by geometry (the
+    right camera is the one further along the left camera's image x axis).
+    """
+    cameras = description.cameras
+    if not cameras:
+        raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)
+    if left is not None and right is not None:
+        pair = (_pick(description, left, "--left"), _pick(description, right, "--right"))
+        if pair[0] is pair[1]:
+            raise SourceError("--left and --right name the same camera", path=description.path, field="--right",
+                              hint="name two different cameras")
+        return pair
+    if len(cameras) != 2 or left is not None or right is not None:
+        names = ", ".join(c.name for c in cameras)
+        why = f"found {len(cameras)} camera(s): {names}"
+        raise SourceError(f"cannot choose the stereo pair by itself; {why}", path=description.path,
+                          field="<sensor>", hint="pass --left NAME --right NAME with two of the listed cameras"
+                          if len(cameras) > 1 else "a stereo pair needs two cameras: " + _NO_CAMERA_HINT)
+    first, second = cameras
+    if _side(first) == "right" and _side(second) == "left":
+        return second, first
+    if _side(first) is None or _side(second) is None:
+        tree = KinematicTree(description)
+        T = optical_pose_between(tree, first, second)
+        if T[0, 3] < -1e-9:
+            return second, first
+    return first, second
+
+
+def optical_pose(camera: CameraSpec, *, optical: bool | None = None) -> FloatArray:
+    """``T_link_optical``: the camera's optical frame (z forward, x right, y down) in its link frame.
+
+    ``optical`` True says the link (with the sensor pose) already is the optical frame; None decides by
+    the link's name (``*_optical``, ``*_optical_frame``).
+    """
+    is_optical = camera.link_is_optical if optical is None else optical
+    return camera.T_link_camera if is_optical else camera.T_link_camera @ T_LINK_OPTICAL
+
+
+def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpec, *,
+                         optical: bool | None = None) -> FloatArray:
+    """``T_left_right`` between the two cameras' optical frames (metres), movable joints at zero."""
+    T_links, _ = tree.transform(left.link, right.link)
+    return invert_transform(optical_pose(left, optical=optical)) @ T_links @ optical_pose(right, optical=optical)
+
+
+def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None,
+                optical: bool | None = None) -> StereoPair:
+    """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path."""
+    cam_left, cam_right = select_pair(description, left=left, right=right)
+    tree = KinematicTree(description)
+    _, movable = tree.transform(cam_left.link, cam_right.link)
+    for joint in movable:
+        logger.warning("%s: joint %r (%s) between the camera links is taken at position 0", description.path,
+                       joint.name, joint.type)
+    T = optical_pose_between(tree, cam_left, cam_right, optical=optical)
+    return StereoPair(cam_left, cam_right, T, tuple(movable))

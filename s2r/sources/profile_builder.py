@@ -1,0 +1,163 @@
+"""Sim profiles from robot descriptions: :func:`load_description_profile`."""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from s2r.errors import SourceError
+from s2r.fileio import sha256_file
+from s2r.geometry import opencv_extrinsics_from_pose
+from s2r.profile import (
+    Camera,
+    Distortion,
+    Extrinsics,
+    MatcherSettings,
+    Provenance,
+    SimulationSettings,
+    SourceFile,
+    StereoProfile,
+)
+from s2r.sources.conventions import check_convention, gazebo_to_opencv_distortion, intrinsics_for
+from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
+from s2r.sources.loader import StereoPair, load_description, stereo_pair
+
+__all__ = ["SEED_SGBM", "load_description_profile", "profile_from_pair", "seed_matcher"]
+
+logger = logging.getLogger(__name__)
+
+#: The seed tutorial's StereoSGBM settings (REFERENCE.md): 112 disparities, block 5, P1 8*3*5^2, P2 32*3*5^2.
+SEED_SGBM: dict[str, int] = {
+    "min_disparity": 0, "num_disparities": 112, "block_size": 5, "p1": 8 * 3 * 25, "p2": 32 * 3 * 25,
+    "disp12_max_diff": 1, "uniqueness_ratio": 10, "speckle_window_size": 100, "speckle_range": 32,
+}
+#: Gazebo's defaults for an absent ``<clip>``, metres.
+DEFAULT_CLIP_M = (0.1, 100.0)
+
+
+def seed_matcher(fx_px: float, baseline_m: float, width_px: int, *, far_limit_m: float) -> MatcherSettings:
+    """The seed's SGBM with a working range it can see: min_depth_m is fx B / 111 px (the largest disparity
+    of 112) rounded UP to the centimetre, max_depth_m where the theoretical RMS reaches 2 % (s = 0.08 px),
+    capped at ``far_limit_m``. Falls back to defaults when 112 disparities do not fit the image."""
+    fb = fx_px * baseline_m
+    if SEED_SGBM["num_disparities"] >= width_px or fb <= 0:
+        return MatcherSettings()
+    d_max = SEED_SGBM["min_disparity"] + SEED_SGBM["num_disparities"] - 1
+    min_depth = math.ceil(100.0 * fb / d_max) / 100.0
+    max_depth = min(far_limit_m, math.floor(10.0 * 0.02 * fb / 0.08) / 10.0)
+    max_depth = max(max_depth, 2.0 * min_depth)
+    return MatcherSettings(algorithm="sgbm", min_depth_m=min_depth, max_depth_m=max_depth, **SEED_SGBM)
+
+
+def _distortion(spec: CameraSpec, fx: float, fy: float) -> Distortion:
+    d = spec.distortion
+    if d is None or d.is_zero:
+        return Distortion()
+    fit = gazebo_to_opencv_distortion(d.k1, d.k2, d.k3, d.p1, d.p2, width=spec.width, height=spec.height,
+                                      fx=fx, fy=fy, center=d.center)
+    if fit.max_px > 0.05:
+        logger.warning("camera %r: Gazebo's image-normalised <distortion> has no exact OpenCV equivalent at %dx%d; "
+                       "the fitted plumb_bob model differs by %.3f px RMS, %.3f px at worst",
+                       spec.name, spec.width, spec.height, fit.rms_px, fit.max_px)
+    return Distortion(model="plumb_bob", coefficients=fit.coefficients)
+
+
+def _camera(spec: CameraSpec, convention: str, optical: bool) -> Camera:
+    if spec.lens is not None and convention != "gz-sim":
+        logger.warning("camera %r: <lens><intrinsics> is only honoured by gz-sim; the %s convention uses "
+                       "horizontal_fov", spec.name, convention)
+    k = intrinsics_for(spec.width, spec.height, spec.hfov_rad, convention, spec.lens)
+    frame = spec.plugin.frame_name if spec.plugin and spec.plugin.frame_name else ""
+    if not frame.endswith(OPTICAL_SUFFIXES):
+        frame = spec.link if optical else f"{spec.link}_optical_frame"
+    return Camera(width_px=spec.width, height_px=spec.height, fx_px=k.fx, fy_px=k.fy, cx_px=k.cx, cy_px=k.cy,
+                  skew=k.skew, distortion=_distortion(spec, k.fx, k.fy), frame_id=frame)
+
+
+def _simulation(spec: CameraSpec) -> SimulationSettings:
+    near = spec.clip_near_m if spec.clip_near_m is not None else DEFAULT_CLIP_M[0]
+    far = spec.clip_far_m if spec.clip_far_m is not None else DEFAULT_CLIP_M[1]
+    return SimulationSettings(clip_near_m=near, clip_far_m=far, update_rate_hz=spec.update_rate_hz or None,
+                              noise_stddev=spec.noise.stddev if spec.noise else None)
+
+
+def _default_name(path: Path) -> str:
+    stem = path.name.split(".")[0]
+    return re.sub(r"[^A-Za-z0-9_.\-]", "_", stem) or "sim_rig"
+
+
+def _extrinsics(pair: StereoPair, path: Path) -> Extrinsics:
+    R, T = opencv_extrinsics_from_pose(pair.T_left_right)
+    if float((T**2).sum()) < 1e-12:
+        raise SourceError(f"cameras {pair.left.name!r} and {pair.right.name!r} are at the same place (zero "
+                          "baseline)", path=path, field="<joint>/<pose>",
+                          hint="move the right camera sideways, e.g. joint origin xyz='0 -0.1 0'")
+    return Extrinsics(rotation=tuple(map(tuple, R.tolist())), translation_m=tuple(T.tolist()))  # type: ignore[arg-type]
+
+
+def load_description_profile(
+    path: str | Path, *, convention: str = "gazebo-classic", left: str | None = None, right: str | None = None,
+    xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (), name: str | None = None,
+    optical: bool | None = None,
+) -> StereoProfile:
+    """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors.
+
+    Args:
+        path: ``.urdf``, ``.xacro``, ``.urdf.xacro``, ``.sdf`` or ``.world`` file.
+        convention: pixel convention of the intrinsics: ``gazebo-classic``, ``gz-sim`` or ``exact``.
+        left, right: camera names (sensor, ``sensor/camera``, camera or link name) when not unambiguous.
+        xacro_args: ``name:=value`` arguments of a xacro file.
+        package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
+        name: profile name (default: the file name up to its first dot).
+        optical: True if the camera links are optical frames already; None decides by link name.
+
+    Returns:
+        Origin ``sim``; R, T in OpenCV's convention (metres); provenance with the convention and the source
+        file's sha256; simulation settings from ``<clip>``, ``<update_rate>`` and ``<noise>``.
+    """
+    source = Path(path)
+    check_convention(convention)
+    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths)
+    pair = stereo_pair(description, left=left, right=right, optical=optical)
+    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args,
+                             optical=optical)
+
+
+def profile_from_pair(description: Description, pair: StereoPair, *, convention: str = "gazebo-classic",
+                      name: str | None = None, xacro_args: Mapping[str, str] | None = None,
+                      optical: bool | None = None) -> StereoProfile:
+    """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
+    source = description.path
+
+    def is_optical(camera: CameraSpec) -> bool:
+        return camera.link_is_optical if optical is None else optical
+
+    left_cam = _camera(pair.left, convention, is_optical(pair.left))
+    right_cam = _camera(pair.right, convention, is_optical(pair.right))
+    extrinsics = _extrinsics(pair, source)
+    baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
+    simulation = _simulation(pair.left)
+    args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
+    notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
+             f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
+    try:
+        return StereoProfile(
+            name=name or _default_name(source),
+            description=f"{description.kind.upper()} stereo pair from {source.name} ({convention} convention)",
+            left=left_cam, right=right_cam, extrinsics=extrinsics,
+            matcher=seed_matcher(left_cam.fx_px, baseline, left_cam.width_px, far_limit_m=simulation.clip_far_m),
+            simulation=simulation,
+            provenance=Provenance(origin="sim", method=f"s2r profile from-urdf ({description.kind})",
+                                  convention=convention, sources=(SourceFile(path=str(source),
+                                                                             sha256=sha256_file(source)),),
+                                  notes=notes),
+        )
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        raise SourceError(f"the cameras do not make a valid profile: {first['msg']}", path=source,
+                          field=".".join(str(p) for p in first["loc"]), hint="check the two camera sensors") from None

@@ -1,0 +1,138 @@
+"""xacro expansion through the ``xacro`` package, with ``$(find pkg)`` resolved from package folders.
+
+ROS resolves ``$(find pkg)`` through ament_index (ROS 2) or rospack (ROS 1), neither of which exists
+outside a ROS install; here a package is looked up in the ``--package-path`` folders given, then in the
+``ROS_PACKAGE_PATH`` environment variable: a folder named ``pkg`` (or holding a ``package.xml`` whose
+``<name>`` is ``pkg``) directly in, or up to three levels below, one of those folders.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from s2r.errors import SourceError
+
+__all__ = ["PACKAGE_PATH_ENV", "expand_xacro", "find_package", "is_xacro", "package_search_roots"]
+
+PACKAGE_PATH_ENV = "ROS_PACKAGE_PATH"
+_MAX_DEPTH = 3
+_FIND_HINT = f"pass --package-path DIR with the folder that holds it, or add that folder to {PACKAGE_PATH_ENV}"
+
+
+class PackageNotFound(LookupError):
+    """A ``$(find pkg)`` package that no search folder holds."""
+
+    def __init__(self, package: str) -> None:
+        super().__init__(package)
+        self.package = package
+
+
+def is_xacro(path: Path) -> bool:
+    """True for ``.xacro`` files (``robot.urdf.xacro``, ``robot.xacro``)."""
+    return path.suffix == ".xacro"
+
+
+def package_search_roots(package_paths: Sequence[Path] = ()) -> list[Path]:
+    """The folders searched for ``$(find pkg)``: the given ones first, then ``ROS_PACKAGE_PATH``."""
+    env = [Path(p) for p in os.environ.get(PACKAGE_PATH_ENV, "").split(os.pathsep) if p]
+    return [Path(p) for p in package_paths] + env
+
+
+def _package_name(folder: Path) -> str | None:
+    manifest = folder / "package.xml"
+    if not manifest.is_file():
+        return None
+    match = re.search(r"<name>\s*([^<\s]+)\s*</name>", manifest.read_text(encoding="utf-8", errors="replace"))
+    return match.group(1) if match else None
+
+
+def _walk(root: Path, depth: int) -> Iterator[Path]:
+    yield root
+    if depth <= 0:
+        return
+    try:
+        children = sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+    except OSError:
+        return
+    for child in children:
+        yield from _walk(child, depth - 1)
+
+
+def find_package(package: str, package_paths: Sequence[Path] = ()) -> Path:
+    """The folder of ROS package ``package`` (what ``$(find package)`` expands to).
+
+    Raises:
+        PackageNotFound: no search folder holds it.
+    """
+    for root in package_search_roots(package_paths):
+        if not root.is_dir():
+            continue
+        for folder in _walk(root, _MAX_DEPTH):
+            name = _package_name(folder)
+            if name == package or (name is None and folder.name == package and folder != root):
+                return folder.resolve()
+    raise PackageNotFound(package)
+
+
+@contextmanager
+def _find_resolver(package_paths: Sequence[Path]) -> Iterator[None]:
+    from xacro import substitution_args
+
+    def resolve(package: str) -> str:
+        return str(find_package(package, package_paths))
+
+    saved_func, saved_eval = substitution_args._eval_find, substitution_args._eval_dict["find"]
+    substitution_args._eval_find = resolve
+    substitution_args._eval_dict["find"] = resolve
+    try:
+        yield
+    finally:
+        substitution_args._eval_find = saved_func
+        substitution_args._eval_dict["find"] = saved_eval
+
+
+def _root_cause(exc: BaseException) -> BaseException:
+    seen: set[int] = set()
+    current: Any = exc
+    while id(current) not in seen:
+        seen.add(id(current))
+        inner = getattr(current, "exc", None) or current.__cause__ or current.__context__
+        if not isinstance(inner, BaseException):
+            return current  # type: ignore[no-any-return]
+        current = inner
+    return current  # type: ignore[no-any-return]
+
+
+def expand_xacro(
+    path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = ()
+) -> str:
+    """Expand the xacro file ``path`` to URDF/SDF XML text.
+
+    Args:
+        path: the ``.xacro`` file.
+        xacro_args: ``<xacro:arg>`` values, as ``name:=value`` on the xacro command line.
+        package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
+
+    Raises:
+        SourceError: unresolved ``$(find)``, an undefined argument, or any other xacro failure.
+    """
+    import xacro
+
+    mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
+    try:
+        with _find_resolver(package_paths):
+            doc = xacro.process_file(str(Path(path).resolve()), mappings=mappings)
+    except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
+        cause = _root_cause(exc)
+        if isinstance(cause, PackageNotFound):
+            raise SourceError(f"$(find {cause.package}): package {cause.package!r} not found", path=path,
+                              field="$(find)", hint=_FIND_HINT) from None
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise SourceError(f"xacro expansion failed: {detail}", path=path, field="xacro",
+                          hint="fix the xacro file or pass the missing name:=value arguments") from None
+    return str(doc.toprettyxml(indent="  "))
