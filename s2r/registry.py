@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 
 from s2r.errors import ProfileError
-from s2r.formats.s2r_yaml import load_profile_file
+from s2r.formats.detect import load_any
 from s2r.profile import StereoProfile
 
 __all__ = ["PROFILE_ENV", "PROFILE_PATH_ENV", "SHIPPED_PROFILES", "list_profiles", "load_profile", "resolve_profile"]
@@ -69,5 +69,7 @@ def load_profile(name_or_path: str | Path | None = None) -> StereoProfile:
 
     Returns a :class:`StereoProfile` with ``.left.K``, ``.left.D``, ``.right.K``, ``.right.D``, ``.R``,
     ``.T`` (OpenCV convention, metres), ``.baseline_m`` and ``.image_size`` ``(width, height)``.
+    A path may be any format :func:`s2r.formats.detect.load_any` reads from one file (s2r YAML, Kalibr,
+    OpenCV FileStorage with R and T, rs-enumerate-devices text, a folder with ROS left.yaml/right.yaml).
     """
-    return load_profile_file(resolve_profile(name_or_path))
+    return load_any(resolve_profile(name_or_path))

@@ -38,6 +38,7 @@ __all__ = [
     "build_stereo",
     "check_rotation_field",
     "distortion_for",
+    "first_document",
     "provenance_for",
     "read_text",
     "read_yaml",
@@ -58,6 +59,20 @@ def read_text(path: str | Path) -> str:
         raise FormatError("is a folder, not a file", path=source, hint="pass the file inside it") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise FormatError(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
+
+
+def first_document(text: str) -> str:
+    """The first non-empty YAML document of ``text`` (``rostopic echo`` separates messages with ``---``)."""
+    docs: list[list[str]] = [[]]
+    for line in text.splitlines():
+        if line.strip() == "---":
+            docs.append([])
+        else:
+            docs[-1].append(line)
+    for doc in docs:
+        if any(line.strip() and not line.lstrip().startswith("#") for line in doc):
+            return "\n".join(doc)
+    return ""
 
 
 def read_yaml(text: str, path: str | Path) -> Any:
@@ -231,5 +246,7 @@ def provenance_for(
     paths: Sequence[str | Path], fmt: str, *, origin: str = "real", notes: str = ""
 ) -> Provenance:
     """Provenance of an imported profile: origin, ``imported from <fmt>``, the sources with sha256."""
+    if origin not in ("real", "sim", "nominal"):
+        raise FormatError(f"origin must be real, sim or nominal, got {origin!r}", field="--origin")
     sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in paths)
     return Provenance(origin=origin, method=f"imported from {fmt}", sources=sources, notes=notes)  # type: ignore[arg-type]

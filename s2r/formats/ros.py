@@ -30,13 +30,13 @@ from s2r.formats._common import (
     build_stereo,
     check_rotation_field,
     distortion_for,
+    first_document,
     provenance_for,
     read_text,
     read_yaml,
     require,
 )
 from s2r.profile import Camera, StereoProfile
-from s2r.rectification import stereo_rectification
 
 __all__ = [
     "RosCameraInfo",
@@ -90,22 +90,8 @@ def is_camera_info_mapping(data: Any) -> bool:
     return "camera_matrix" in keys or ({"K", "P"} <= keys) or ({"k", "p"} <= keys)
 
 
-def _echo_documents(text: str) -> str:
-    """The first non-empty document of ``rostopic echo`` output (messages are separated by ``---``)."""
-    docs: list[list[str]] = [[]]
-    for line in text.splitlines():
-        if line.strip() == "---":
-            docs.append([])
-        else:
-            docs[-1].append(line)
-    for doc in docs:
-        if any(line.strip() and not line.lstrip().startswith("#") for line in doc):
-            return "\n".join(doc)
-    return ""
-
-
 def _parse_mapping(text: str, path: Path) -> dict[Any, Any]:
-    data = read_yaml(_echo_documents(text), path)
+    data = read_yaml(first_document(text), path)
     if not isinstance(data, dict):
         raise FormatError("expected a camera_info mapping (image_width, camera_matrix, ... or K:, P:)", path=path,
                           hint="pass a camera_calibration_parsers YAML or saved `rostopic echo` output")
@@ -220,6 +206,8 @@ def load_ros_pair(
 
 def ros_pair_from_profile(profile: StereoProfile, *, alpha: float = 0.0) -> tuple[RosCameraInfo, RosCameraInfo]:
     """The left and right camera_info of a profile's rectified pair (``alpha`` as in stereoRectify)."""
+    from s2r.rectification import stereo_rectification  # local: reading camera_info needs no OpenCV
+
     rect = stereo_rectification(profile, alpha=alpha)
     infos = []
     for side, cam, R, P in (("left", profile.left, rect.R1, rect.P1), ("right", profile.right, rect.R2, rect.P2)):

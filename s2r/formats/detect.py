@@ -1,0 +1,149 @@
+"""Content-based format detection and one loader for every supported stereo calibration format.
+
+Detected from the file's content, never its name: s2r profile YAML, ROS camera_info (camera_calibration_parsers
+YAML or ``rostopic echo`` text; two files or a folder holding left.yaml and right.yaml), OpenCV FileStorage
+YAML/XML (one file, or intrinsics + extrinsics), Kalibr camchain YAML and RealSense ``rs-enumerate-devices -c``
+text. Every failure is an :class:`~s2r.errors.S2RError` naming the file and field.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+from s2r.errors import FormatError
+from s2r.formats._common import first_document, read_text
+from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr
+from s2r.formats.realsense import is_realsense_text, load_realsense
+from s2r.formats.ros import is_camera_info_mapping, load_ros_pair
+from s2r.formats.s2r_yaml import load_profile_file
+from s2r.profile import StereoProfile
+
+__all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any"]
+
+Format = Literal["s2r", "ros", "opencv", "kalibr", "realsense"]
+#: Human names of the formats, as used in messages and provenance.
+FORMAT_NAMES: dict[str, str] = {
+    "s2r": "s2r profile YAML", "ros": "ROS camera_info", "opencv": "OpenCV FileStorage",
+    "kalibr": "Kalibr camchain", "realsense": "rs-enumerate-devices text",
+}
+_EXPECTED = (
+    "expected an s2r profile, ROS camera_info, OpenCV FileStorage, Kalibr camchain or rs-enumerate-devices -c text"
+)
+
+
+def _is_opencv(text: str) -> bool:
+    head = text.lstrip()[:200]
+    return head.startswith("%YAML") or "opencv-matrix" in text or "<opencv_storage>" in head
+
+
+def _is_s2r(data: dict[Any, Any]) -> bool:
+    return "schema_version" in data or ("left" in data and "right" in data and "extrinsics" in data)
+
+
+def _yaml_mapping(text: str) -> dict[Any, Any] | None:
+    import yaml  # local: only detection needs the raw parse
+
+    try:
+        data = yaml.safe_load(first_document(text))
+    except (yaml.YAMLError, ValueError, TypeError, OverflowError, RecursionError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def detect_format(path: str | Path) -> Format:
+    """The format of one file from its content; FormatError when it matches none."""
+    source = Path(path)
+    if source.is_dir():
+        if (source / "left.yaml").is_file() and (source / "right.yaml").is_file():
+            return "ros"
+        raise FormatError("is a folder without left.yaml and right.yaml", path=source,
+                          hint="pass a calibration file, or a folder holding a ROS left.yaml/right.yaml pair")
+    text = read_text(source)
+    if _is_opencv(text):
+        return "opencv"
+    if is_realsense_text(text):
+        return "realsense"
+    data = _yaml_mapping(text)
+    if data is None:
+        if "schema_version" in text or "extrinsics" in text:
+            return "s2r"  # a broken s2r profile: its loader names the malformed line
+        raise FormatError(f"unrecognised content: not YAML, FileStorage or rs-enumerate-devices text ({_EXPECTED})",
+                          path=source)
+    if _is_s2r(data):
+        return "s2r"
+    if is_kalibr_mapping(data):
+        return "kalibr"
+    if is_camera_info_mapping(data):
+        return "ros"
+    keys = ", ".join(sorted(str(k) for k in data)[:6])
+    raise FormatError(f"unrecognised format (top-level keys: {keys}); {_EXPECTED}", path=source)
+
+
+def _renamed(profile: StereoProfile, name: str | None) -> StereoProfile:
+    if not name or name == profile.name:
+        return profile
+    data = profile.model_dump()
+    data["name"] = name
+    try:
+        return StereoProfile.model_validate(data)
+    except ValueError:
+        raise FormatError(f"invalid profile name {name!r}", field="--name",
+                          hint="use letters, digits, '_', '.' and '-'") from None
+
+
+def _load_pair(paths: list[Path], fmts: list[Format], *, name: str | None, origin: str,
+               image_size: tuple[int, int] | None, t_scale_m: float) -> StereoProfile:
+    if fmts == ["ros", "ros"]:
+        return load_ros_pair(paths[0], paths[1], name=name, origin=origin)
+    if fmts == ["opencv", "opencv"]:
+        from s2r.formats.opencv import load_opencv  # local: OpenCV loads only when needed
+
+        return load_opencv(paths, image_size=image_size, t_scale_m=t_scale_m, name=name, origin=origin)
+    found = " + ".join(FORMAT_NAMES[f] for f in fmts)
+    raise FormatError(f"two inputs ({found}) must be a ROS camera_info pair or OpenCV intrinsics + extrinsics",
+                      path=paths[1], hint="pass one file for the other formats")
+
+
+def load_any(
+    paths: str | Path | Sequence[str | Path],
+    *,
+    name: str | None = None,
+    origin: str = "real",
+    image_size: tuple[int, int] | None = None,
+    t_scale_m: float = 1.0,
+    resolution: tuple[int, int] | None = None,
+) -> StereoProfile:
+    """Load a stereo profile from any supported format, detected from content.
+
+    Args:
+        paths: one file (s2r, OpenCV, Kalibr, RealSense text, or a folder with ROS left.yaml/right.yaml) or two
+            (ROS left + right camera_info; OpenCV intrinsics + extrinsics).
+        name: profile name for imported formats (default derived from the file).
+        origin: provenance origin of imported profiles (``real``, ``sim`` or ``nominal``).
+        image_size: ``(width, height)`` for OpenCV files that do not hold it.
+        t_scale_m: metres per unit of an OpenCV file's T (its square size when calibrated in squares).
+        resolution: ``(width, height)`` of the RealSense infrared streams to import.
+    """
+    files = [Path(paths)] if isinstance(paths, (str, Path)) else [Path(p) for p in paths]
+    if len(files) not in (1, 2):
+        raise FormatError(f"expected one or two input files, got {len(files)}")
+    fmts = [detect_format(p) for p in files]
+    if len(files) == 2:
+        return _load_pair(files, fmts, name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m)
+    source, fmt = files[0], fmts[0]
+    if fmt == "s2r":
+        return _renamed(load_profile_file(source), name)
+    if fmt == "ros":
+        if source.is_dir():
+            return load_ros_pair(source / "left.yaml", source / "right.yaml", name=name or source.name, origin=origin)
+        raise FormatError("a camera_info file holds one camera; a stereo profile needs two", path=source,
+                          hint="pass the left and the right camera_info files together")
+    if fmt == "opencv":
+        from s2r.formats.opencv import load_opencv
+
+        return load_opencv(source, image_size=image_size, t_scale_m=t_scale_m, name=name, origin=origin)
+    if fmt == "kalibr":
+        return load_kalibr(source, name=name, origin=origin)
+    return load_realsense(source, resolution=resolution, name=name, origin=origin)

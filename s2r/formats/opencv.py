@@ -1,0 +1,263 @@
+"""OpenCV FileStorage (YAML or XML) as OpenCV's stereo_calib sample writes it, read and written by cv2.FileStorage.
+
+Nodes: ``M1 D1 M2 D2`` (camera matrices and distortion), ``R T`` (OpenCV extrinsics,
+``X_right = R X_left + T``), optionally ``R1 R2 P1 P2 Q`` (rectification; ignored on import, recomputed
+on export). The sample writes ``intrinsics.yml`` (M1 D1 M2 D2) and ``extrinsics.yml`` (R T R1 R2 P1 P2 Q)
+and no image size: pass both files, and the image size when neither file holds ``image_width`` /
+``image_height``.
+
+Units: ``T`` is in whatever unit the board's square size was given in. The sample calibrates with a
+square size of 1 unless told otherwise, so its T is in SQUARES: pass ``t_scale_m`` (CLI ``--units-m``)
+= the square size in metres (e.g. 0.025) to get metres.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.errors import FormatError
+from s2r.fileio import atomic_write_text
+from s2r.formats._common import (
+    as_int,
+    as_matrix,
+    build_camera,
+    build_stereo,
+    check_rotation_field,
+    distortion_for,
+    provenance_for,
+    read_text,
+)
+from s2r.profile import Camera, Distortion, StereoProfile
+from s2r.rectification import stereo_rectification
+
+__all__ = ["OpenCVStereo", "dump_opencv", "load_opencv", "opencv_to_text", "read_opencv_stereo"]
+
+log = logging.getLogger(__name__)
+FloatArray = NDArray[np.float64]
+NodeValue = FloatArray | str | float
+
+
+@dataclass(frozen=True, eq=False)
+class OpenCVStereo:
+    """The nodes of OpenCV stereo calibration file(s): K (3x3, pixels), D vectors, optional R (3x3), T (3,)."""
+
+    M1: FloatArray
+    D1: FloatArray
+    M2: FloatArray
+    D2: FloatArray
+    R: FloatArray | None
+    T: FloatArray | None
+    image_size: tuple[int, int] | None
+    distortion_model: str | None
+    paths: tuple[Path, ...]
+
+
+def _cv_message(exc: BaseException) -> str:
+    """The useful tail of a cv2.error text (``file(line): what``), on one line."""
+    cause = exc.__cause__ if exc.__cause__ is not None else exc
+    text = " ".join(str(cause).split())
+    found = re.search(r"in function '[^']*?\((\d+)\): (.*)'", text)
+    if found:
+        return f"line {found.group(1)}: {found.group(2)}"
+    found = re.search(r"error: \(-?\d+:([^)]*)\) (.*)", text)
+    return f"{found.group(1)}: {found.group(2)}" if found else text
+
+
+def _node_value(node: Any) -> NodeValue | None:
+    if node.isString():
+        return str(node.string())
+    if node.isInt() or node.isReal():
+        return float(node.real())
+    if node.isSeq():
+        return np.array([node.at(i).real() for i in range(node.size())], dtype=np.float64)
+    mat = node.mat()
+    return None if mat is None else np.asarray(mat, dtype=np.float64)
+
+
+def _read_nodes(path: Path) -> dict[str, NodeValue | None]:
+    """Every top-level node of a FileStorage file; a parse error becomes a one-line FormatError."""
+    read_text(path)  # missing / unreadable file -> FormatError before cv2 logs its own complaint
+    try:
+        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        if not storage.isOpened():
+            raise FormatError("OpenCV cannot open this file as FileStorage", path=path)
+        root = storage.root()
+        if not root.isMap():
+            raise FormatError("no named nodes found (expected M1, D1, M2, D2, R, T)", path=path,
+                              hint="is this an OpenCV FileStorage file?")
+        nodes = {str(key): _node_value(storage.getNode(key)) for key in root.keys()}  # noqa: SIM118 (cv2.FileNode)
+        storage.release()
+    except FormatError:
+        raise
+    except Exception as exc:  # cv2.error, or SystemError wrapping it
+        raise FormatError(f"malformed or truncated OpenCV FileStorage: {_cv_message(exc)}", path=path,
+                          hint="re-export the file from OpenCV") from None
+    return nodes
+
+
+def _array(nodes: dict[str, NodeValue | None], key: str, path: Path) -> FloatArray | None:
+    value = nodes.get(key)
+    if value is None:
+        return None
+    if not isinstance(value, np.ndarray):
+        raise FormatError("expected a matrix", path=path, field=key)
+    if not np.all(np.isfinite(value)):
+        raise FormatError("must hold finite numbers only (found NaN or inf)", path=path, field=key)
+    return value
+
+
+def _image_size(nodes: dict[str, NodeValue | None], path: Path) -> tuple[int, int] | None:
+    for wkey, hkey in (("image_width", "image_height"), ("width", "height")):
+        if wkey in nodes and hkey in nodes:
+            return as_int(nodes[wkey], path, wkey), as_int(nodes[hkey], path, hkey)
+    for key in ("imageSize", "image_size"):
+        value = nodes.get(key)
+        if isinstance(value, np.ndarray):
+            size = as_matrix(value.tolist(), (2,), path, key)
+            return as_int(size[0], path, key), as_int(size[1], path, key)
+    return None
+
+
+def read_opencv_stereo(paths: str | Path | Sequence[str | Path]) -> OpenCVStereo:
+    """Read M1 D1 M2 D2 (and R T when present) from one file or a pair (intrinsics + extrinsics).
+
+    A node found in an earlier file wins over the same node in a later one.
+    """
+    files = [Path(paths)] if isinstance(paths, (str, Path)) else [Path(p) for p in paths]
+    merged: dict[str, tuple[NodeValue | None, Path]] = {}
+    for path in files:
+        for key, value in _read_nodes(path).items():
+            merged.setdefault(key, (value, path))
+    nodes = {k: v for k, (v, _) in merged.items()}
+
+    def where(key: str) -> Path:
+        return merged[key][1] if key in merged else files[0]
+
+    required = {}
+    for key in ("M1", "D1", "M2", "D2"):
+        value = _array(nodes, key, where(key))
+        if value is None:
+            raise FormatError("required matrix is missing (OpenCV stereo files hold M1 D1 M2 D2)", path=where(key),
+                              field=key, hint="pass the stereo sample's intrinsics.yml")
+        required[key] = value
+    for key in ("M1", "M2"):
+        required[key] = as_matrix(required[key].tolist(), (3, 3), where(key), key)
+    for key in ("D1", "D2"):
+        required[key] = required[key].reshape(-1)
+    model = nodes.get("distortion_model")
+    return OpenCVStereo(
+        M1=required["M1"], D1=required["D1"], M2=required["M2"], D2=required["D2"],
+        R=_rotation(nodes, where("R")), T=_translation(nodes, where("T")),
+        image_size=_image_size(nodes, where("image_width")), distortion_model=model if isinstance(model, str) else None,
+        paths=tuple(files),
+    )
+
+
+def _rotation(nodes: dict[str, NodeValue | None], path: Path) -> FloatArray | None:
+    value = _array(nodes, "R", path)
+    if value is None:
+        return None
+    if value.size == 3:  # a Rodrigues rotation vector
+        value = np.asarray(cv2.Rodrigues(value.reshape(3, 1))[0], dtype=np.float64)
+    return check_rotation_field(as_matrix(value.tolist(), (3, 3), path, "R"), path, "R")
+
+
+def _translation(nodes: dict[str, NodeValue | None], path: Path) -> FloatArray | None:
+    value = _array(nodes, "T", path)
+    return None if value is None else as_matrix(value.reshape(-1).tolist(), (3,), path, "T")
+
+
+def _distortion(coeffs: FloatArray, model: str | None, path: Path, field: str) -> Distortion:
+    values = [float(v) for v in coeffs]
+    if model in ("equidistant", "fisheye"):
+        return distortion_for("equidistant", values, path, field)
+    if len(values) in (12, 14) and not any(values[8:]):
+        values = values[:8]  # OpenCV's thin-prism / tilt terms, all zero: the rational model
+    if len(values) == 4:
+        values = [*values, 0.0]  # k1 k2 p1 p2 without k3
+    counts = {5: "plumb_bob", 8: "rational_polynomial"}
+    if len(values) not in counts:
+        raise FormatError(f"expected 4, 5 or 8 distortion coefficients, got {len(values)}", path=path, field=field,
+                          hint="thin-prism and tilt terms (12/14 coefficients) are not supported unless zero")
+    return distortion_for(counts[len(values)], values, path, field)
+
+
+def _camera(data: OpenCVStereo, side: int, size: tuple[int, int]) -> Camera:
+    K, D = (data.M1, data.D1) if side == 1 else (data.M2, data.D2)
+    path = data.paths[0]
+    distortion = _distortion(D, data.distortion_model, path, f"D{side}")
+    return build_camera(K=K, size=size, distortion=distortion, path=path, field=f"M{side}")
+
+
+def load_opencv(
+    paths: str | Path | Sequence[str | Path],
+    *,
+    image_size: tuple[int, int] | None = None,
+    t_scale_m: float = 1.0,
+    name: str | None = None,
+    origin: str = "real",
+) -> StereoProfile:
+    """A stereo profile from OpenCV stereo calibration file(s).
+
+    Args:
+        paths: one file with M1 D1 M2 D2 R T, or the sample's intrinsics.yml and extrinsics.yml.
+        image_size: ``(width, height)`` in pixels when the files do not hold it.
+        t_scale_m: metres per unit of the file's T (the square size when calibrated in squares).
+    """
+    data = read_opencv_stereo(paths)
+    first = data.paths[0]
+    size = data.image_size or image_size
+    if size is None:
+        raise FormatError("image size not in the file", path=first, field="image_width/image_height",
+                          hint="pass --image-size WIDTHxHEIGHT")
+    if data.R is None or data.T is None:
+        raise FormatError("holds intrinsics only (M1 D1 M2 D2), no extrinsics R and T", path=first,
+                          field="R" if data.R is None else "T",
+                          hint="pass the extrinsics.yml written with it as a second file")
+    if not (t_scale_m > 0 and np.isfinite(t_scale_m)):
+        raise FormatError(f"T scale must be a positive number of metres, got {t_scale_m}", field="--units-m")
+    T = data.T * t_scale_m
+    if float(np.linalg.norm(T)) > 5.0:
+        log.warning("%s: |T| = %.3g m is implausibly long; if T is in squares or mm pass --units-m", first,
+                    float(np.linalg.norm(T)))
+    return build_stereo(
+        name=name or first.stem, left=_camera(data, 1, size), right=_camera(data, 2, size), R=data.R, T=T,
+        path=data.paths[-1], provenance=provenance_for(data.paths, "OpenCV FileStorage", origin=origin),
+        description=f"imported from OpenCV FileStorage {', '.join(p.name for p in data.paths)}",
+    )
+
+
+def opencv_to_text(profile: StereoProfile, *, xml: bool = False, rectification: bool = True) -> str:
+    """The profile as OpenCV stereo FileStorage text (image size, M1 D1 M2 D2 R T, and R1 R2 P1 P2 Q)."""
+    storage = cv2.FileStorage("out.xml" if xml else "out.yml", cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_MEMORY)
+    storage.write("image_width", int(profile.image_size[0]))
+    storage.write("image_height", int(profile.image_size[1]))
+    if profile.left.distortion.model == "equidistant":
+        storage.write("distortion_model", "equidistant")
+    nodes = {"M1": profile.left.K, "D1": profile.left.D.reshape(1, -1), "M2": profile.right.K,
+             "D2": profile.right.D.reshape(1, -1), "R": profile.R, "T": profile.T.reshape(3, 1)}
+    if rectification:
+        rect = stereo_rectification(profile)
+        nodes.update(R1=rect.R1, R2=rect.R2, P1=rect.P1, P2=rect.P2, Q=rect.Q)
+    for key, value in nodes.items():
+        storage.write(key, np.ascontiguousarray(value, dtype=np.float64))
+    return str(storage.releaseAndGetString())
+
+
+def dump_opencv(profile: StereoProfile, path: str | Path, *, force: bool = False, rectification: bool = True) -> Path:
+    """Write the profile as OpenCV FileStorage (XML when ``path`` ends in .xml, else YAML), atomically."""
+    out = Path(path)
+    if profile.left.distortion.model != profile.right.distortion.model:
+        raise FormatError("left and right distortion models differ; OpenCV files hold one model", path=out,
+                          field="distortion")
+    text = opencv_to_text(profile, xml=out.suffix.lower() == ".xml", rectification=rectification)
+    return atomic_write_text(out, text, force=force)
