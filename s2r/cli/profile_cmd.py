@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import add_json, print_json
+from s2r.cli._common import add_force, add_json, print_json
+from s2r.errors import FormatError
+from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
+from s2r.formats.kalibr import dump_kalibr
+from s2r.formats.s2r_yaml import dump_profile
 from s2r.profile import StereoProfile
-from s2r.registry import list_profiles, load_profile
+from s2r.registry import list_profiles, load_profile, resolve_profile
 
 __all__ = ["profile_summary", "register"]
 
@@ -26,7 +31,45 @@ def register(sub: Any) -> Any:
     p_show.add_argument("profile", help="profile name or path")
     add_json(p_show)
     p_show.set_defaults(func=_cmd_show)
+    _register_convert(profile_sub)
     return profile_sub
+
+
+def _size(text: str) -> tuple[int, int]:
+    """argparse type for ``WIDTHxHEIGHT``."""
+    width, sep, height = text.lower().partition("x")
+    if not sep or not width.isdigit() or not height.isdigit() or int(width) <= 0 or int(height) <= 0:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 848x480, got {text!r}")
+    return int(width), int(height)
+
+
+def _register_convert(profile_sub: Any) -> None:
+    p_conv = profile_sub.add_parser(
+        "convert", help="convert between s2r, ROS camera_info, OpenCV, Kalibr (and import RealSense text)",
+        description="Convert a stereo calibration. The input format is detected from the content: s2r YAML, "
+        "ROS camera_info (two files: left then right, or a folder with left.yaml/right.yaml; rostopic echo text "
+        "works too), OpenCV FileStorage (one file, or intrinsics.yml + extrinsics.yml), Kalibr camchain, "
+        "rs-enumerate-devices -c text.",
+    )
+    p_conv.add_argument("src", nargs="+", metavar="SRC", help="input file(s): one, or two for ROS / OpenCV pairs")
+    p_conv.add_argument("--to", required=True, choices=("s2r", "ros", "opencv", "kalibr"), help="output format")
+    p_conv.add_argument("-o", "--output", required=True, metavar="OUT",
+                        help="output file (for --to ros: a folder receiving left.yaml and right.yaml)")
+    p_conv.add_argument("--name", help="profile name of the result (default: from the input)")
+    p_conv.add_argument("--origin", default="real", choices=("real", "sim", "nominal"),
+                        help="provenance origin of an imported profile (default real)")
+    p_conv.add_argument("--image-size", type=_size, metavar="WxH",
+                        help="image size for OpenCV files that do not store it (the stereo sample's do not)")
+    p_conv.add_argument("--units-m", type=float, default=1.0, metavar="M",
+                        help="metres per unit of an OpenCV file's T: the square size when it was calibrated in "
+                        "squares, 0.001 for millimetres (default 1: T already in metres)")
+    p_conv.add_argument("--resolution", type=_size, metavar="WxH",
+                        help="RealSense: which infrared resolution to import (default 848x480 or the only one)")
+    p_conv.add_argument("--drop-k3", action="store_true",
+                        help="Kalibr export: drop a non-zero k3 (radtan has none) instead of refusing")
+    add_force(p_conv)
+    add_json(p_conv)
+    p_conv.set_defaults(func=_cmd_convert)
 
 
 def profile_summary(profile: StereoProfile) -> dict[str, Any]:
@@ -88,4 +131,39 @@ def _cmd_show(args: argparse.Namespace) -> int:
     rms = "  ".join(f"{k} {v:.1f}" for k, v in summary["depth_rms_mm"].items())
     print(f"  theoretical depth RMS (mm, s=0.08 px): {rms}")
     print(f"  stays under 2 % depth error up to {summary['depth_2pct_limit_m']:.2f} m")
+    return 0
+
+
+def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
+    out = Path(args.output)
+    if args.to == "s2r":
+        return [dump_profile(profile, out, force=args.force)]
+    if args.to == "kalibr":
+        return [dump_kalibr(profile, out, force=args.force, drop_k3=args.drop_k3)]
+    if args.to == "ros":
+        from s2r.formats.ros import dump_ros_pair  # local: OpenCV (rectification) loads only when needed
+
+        return list(dump_ros_pair(profile, out, force=args.force))
+    from s2r.formats.opencv import dump_opencv
+
+    return [dump_opencv(profile, out, force=args.force)]
+
+
+def _cmd_convert(args: argparse.Namespace) -> int:
+    if len(args.src) > 2:
+        raise FormatError(f"expected one or two inputs, got {len(args.src)}", field="SRC",
+                          hint="two inputs are a ROS left/right pair or OpenCV intrinsics + extrinsics")
+    sources = [str(resolve_profile(args.src[0]))] if len(args.src) == 1 else args.src  # a name works too
+    fmt = detect_format(sources[0])
+    profile = load_any(sources, name=args.name, origin=args.origin, image_size=args.image_size,
+                       t_scale_m=args.units_m, resolution=args.resolution)
+    written = _write(profile, args)
+    if args.json:
+        print_json({"input_format": fmt, "inputs": sources, "output_format": args.to,
+                    "outputs": [str(p) for p in written], "profile": profile_summary(profile)})
+        return 0
+    print(f"read {FORMAT_NAMES[fmt]}: {', '.join(sources)} -> profile {profile.name} "
+          f"({profile.image_size[0]}x{profile.image_size[1]}, baseline {1000 * profile.baseline_m:.2f} mm)")
+    for path in written:
+        print(f"wrote {path}")
     return 0
