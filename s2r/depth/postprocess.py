@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.depth.names import STAGES
 from s2r.errors import DepthError
 
 __all__ = [
@@ -42,8 +43,6 @@ __all__ = [
 
 Raw = NDArray[np.int16]
 
-#: Every post-processing stage name.
-STAGES: tuple[str, ...] = ("speckle", "lr-check", "median", "close", "fill")
 SPECKLE_WINDOW_PX = 100
 SPECKLE_RANGE_PX = 2
 LR_MAX_DIFF_PX = 1.0

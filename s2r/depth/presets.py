@@ -15,15 +15,13 @@ from dataclasses import dataclass, replace
 
 import cv2
 
+from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
 from s2r.profile import MatcherSettings, StereoProfile
 
 __all__ = ["DEFAULT_POSTPROCESS", "PRESETS", "MatcherConfig", "create_matcher", "resolve_preset"]
 
 log = logging.getLogger(__name__)
-
-#: Every preset name, in the order the docs and benchmarks list them.
-PRESETS: tuple[str, ...] = ("profile", "seed-sgbm", "fast", "bm", "ros-default")
 
 #: Post-processing each preset applies when the caller gives none (names from s2r.depth.postprocess).
 DEFAULT_POSTPROCESS: dict[str, tuple[str, ...]] = {
