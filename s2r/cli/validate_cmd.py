@@ -1,11 +1,84 @@
-"""CLI commands of this area (filled in by its issue)."""
+"""``s2r validate SIM [REAL]``: is the simulated camera a faithful twin of the real one?
+
+Exit codes: 0 every figure within tolerance, 1 something is not (listed), 2 bad input.
+"""
 
 from __future__ import annotations
 
+import argparse
+import dataclasses
+import sys
 from typing import Any
+
+from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.errors import ValidateError
+from s2r.fileio import prepare_output_dir
+from s2r.registry import load_profile
 
 __all__ = ["register"]
 
 
 def register(sub: Any) -> None:
-    """Add this area's subcommands."""
+    """Add ``validate``."""
+    parser = sub.add_parser(
+        "validate", help="compare a sim profile with a real one (or self-check one profile)",
+        description="Parameters, projection difference, depth resolution, recovered calibration and depth "
+        "accuracy of a sim profile against a real one, with the edits that make the sim match. With one "
+        "profile: its self-check (recovered calibration and depth accuracy against theory). Exit 0 all within "
+        "tolerance, 1 otherwise, 2 bad input.")
+    parser.add_argument("sim", metavar="SIM", help="sim profile name or path (or the one profile to self-check)")
+    parser.add_argument("real", metavar="REAL", nargs="?", help="real profile name or path")
+    parser.add_argument("--report", metavar="DIR", help="write DIR/validation.html (self-contained)")
+    parser.add_argument("--tolerances", metavar="FILE", help="YAML file of tolerance overrides (key: number)")
+    parser.add_argument("--quick", action="store_true", help="fewer views and planes, no supersampling (~15 s)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the rendered boards and textures")
+    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: cores)")
+    parser.add_argument("--preset", default="profile", help="depth pipeline preset for both profiles")
+    parser.add_argument("--distances", metavar="M,M,...", help="plane distances in metres (default by mode)")
+    add_json(parser)
+    add_force(parser)
+    parser.set_defaults(func=_cmd_validate)
+
+
+def _distances(text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise ValidateError(f"not a list of numbers: {text!r}", field="--distances",
+                            hint="write metres separated by commas, e.g. 0.5,1,2,3") from None
+    if not values or any(not v > 0 for v in values):
+        raise ValidateError(f"distances must be positive metres, got {text!r}", field="--distances",
+                            hint="e.g. 0.5,1,2,3")
+    return values
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from s2r.validate.report import write_validation_report
+    from s2r.validate.run import FULL, QUICK, validate
+    from s2r.validate.summary import summary_lines
+    from s2r.validate.tolerances import load_tolerances
+
+    if args.jobs is not None and args.jobs < 1:
+        raise ValidateError(f"must be at least 1, got {args.jobs}", field="--jobs")
+    tolerances = load_tolerances(args.tolerances)
+    sim = load_profile(args.sim)
+    real = None if args.real is None else load_profile(args.real)
+    settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
+    distances = _distances(args.distances)
+    if distances is not None:
+        settings = dataclasses.replace(settings, distances_m=distances)
+    if args.report:
+        prepare_output_dir(args.report, force=args.force)  # fail before the work, not after
+    quiet = args.quiet or args.json
+    result = validate(sim, real, tolerances=tolerances, settings=settings, jobs=args.jobs,
+                      progress=None if quiet else ProgressBar())
+    if args.json:
+        print_json(result.as_dict())
+    else:
+        print("\n".join(summary_lines(result)))
+    if args.report:
+        path = write_validation_report(result, args.report, force=True)
+        print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
+    return 0 if result.passed else 1

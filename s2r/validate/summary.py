@@ -1,0 +1,101 @@
+"""The terminal summary of a validation run: plain text lines that fit one screen (about 40 lines)."""
+
+from __future__ import annotations
+
+from s2r.validate.params import ParamRow
+from s2r.validate.run import ValidationResult
+
+__all__ = ["summary_lines"]
+
+_MAX_FAILURES = 8
+
+
+def _value(value: float | str | None, digits: int = 5) -> str:
+    if value is None:
+        return "-"
+    return value if isinstance(value, str) else f"{value:.{digits}g}"
+
+
+def _param_lines(rows: list[ParamRow]) -> list[str]:
+    lines = [f"  {'parameter':<22}{'sim':>14}{'real':>14}{'sim-real':>11}{'limit':>9}"]
+    shown = [r for r in rows if not r.name.startswith("right ")]
+    for r in shown:
+        mark = "  FAIL" if r.exceeds_tolerance else ""
+        sim, real = _value(r.sim), _value(r.real)
+        if "distortion" in r.name:
+            sim, real = sim.split(" ")[0] + ("" if "[0, 0" in sim else "*"), real.split(" ")[0]
+        lines.append(f"  {r.name:<22}{sim:>14}{real:>14}{r.diff:>11.4g}{r.limit:>9.3g}{mark}")
+    right_fail = [r.name for r in rows if r.name.startswith("right ") and r.exceeds_tolerance]
+    lines.append(f"  right camera: {len(right_fail)} parameter(s) beyond tolerance"
+                 + (f" ({', '.join(n[6:] for n in right_fail)})" if right_fail else ""))
+    return lines
+
+
+def _resolution_lines(result: ValidationResult) -> list[str]:
+    lines = []
+    for role, res in result.resolution.items():
+        rms = " ".join(f"{z:g}m:{1000 * r:.1f}" for z, r in zip(res.distances_m, res.rms_m, strict=True))
+        lines.append(f"  {role:<8} theory RMS mm {rms}; under 2 % up to {res.limit_2pct_m:.1f} m")
+    return lines
+
+
+def _recovery_lines(result: ValidationResult) -> list[str]:
+    lines = []
+    for role, rec in result.recovery.items():
+        worst = max((r.n_sigma for r in rec.rows if r.n_sigma is not None), default=None)
+        bad = [r.name for r in rec.rows if not r.passed]
+        status = "all within tolerance" if not bad else f"FAIL {', '.join(bad)}"
+        lines.append(f"  {role:<8} {rec.views_used}/{rec.views_rendered} views, RMS {_value(rec.rms_px, 3)} px, "
+                     f"worst {_value(worst, 2)} sigma: {status}")
+    return lines
+
+
+def _depth_lines(result: ValidationResult) -> list[str]:
+    roles = list(result.depth)
+    head = "  bin       " + "".join(f"| {role[:8]:<8} med%   p90%  bias%  fill " for role in roles) + "| theory%"
+    lines = [head]
+    for i, b in enumerate(result.depth[roles[0]].bins):
+        text = f"  {b.lo_m:g}-{b.hi_m:g} m".ljust(12)
+        for role in roles:
+            s = result.depth[role].bins[i]
+            fill = "-" if s.fill_rate is None else f"{s.fill_rate:.0%}"
+            text += f"|          {_value(s.median_pct, 3):>5} {_value(s.p90_pct, 3):>6} {_value(s.bias_pct, 2):>6} "
+            text += f"{fill:>4} "
+        theory = "/".join(f"{result.depth[r].bins[i].theory_hi_pct or 0:.2f}" for r in roles)
+        lines.append(text + f"| {theory}")
+    claim = ", ".join(f"{role} {_value(acc.within_3m.median_pct, 3)} % (fill {acc.within_3m.fill_rate or 0:.0%})"
+                      for role, acc in result.depth.items())
+    lines.append(f"  median |error| within 3 m ({result.settings.preset} preset): {claim}")
+    return lines
+
+
+def _verdict_lines(result: ValidationResult) -> list[str]:
+    if result.passed:
+        return [f"PASS: all {len(result.checks)} checks within tolerance"]
+    failures = result.failures
+    lines = [f"FAIL: {len(failures)} of {len(result.checks)} checks beyond tolerance:"]
+    lines += [f"  - {c.text}" for c in failures[:_MAX_FAILURES]]
+    if len(failures) > _MAX_FAILURES:
+        lines.append(f"  ... and {len(failures) - _MAX_FAILURES} more (--json lists every check)")
+    return lines
+
+
+def summary_lines(result: ValidationResult) -> list[str]:
+    """The run as terminal lines: parameters, projection, resolution, recovery, depth, edits, verdict."""
+    names = " vs ".join(f"{p.name} ({role})" for role, p in result.roles.items())
+    s = result.settings
+    lines = [f"s2r validate: {names}  [{s.views} views, supersample {s.supersample}, preset {s.preset}, seed {s.seed}]"]
+    if result.pair:
+        lines += ["Parameters:", *_param_lines(result.params)]
+        proj = "; ".join(f"{d.camera} mean {d.mean_px:.3g} p95 {d.p95_px:.3g} px" for d in result.projection)
+        lines.append(f"Projection difference at {result.tolerances.working_distance_m:g} m: {proj}")
+    lines += ["Depth resolution (Intel model):", *_resolution_lines(result)]
+    if result.recovery:
+        lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
+    if result.depth:
+        lines += ["Depth accuracy (rendered planes, |relative error|):", *_depth_lines(result)]
+    if result.edits:
+        lines.append("To make the sim match the real camera:")
+        lines += [f"  {e.parameter}: {e.current} -> {e.target}  [{e.where}]" for e in result.edits]
+    timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
+    return [*lines, *_verdict_lines(result), f"({timing})"]
