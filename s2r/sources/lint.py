@@ -1,0 +1,246 @@
+"""``s2r lint``: mistakes in a robot description's stereo pair, each with a severity, a place and a fix.
+
+Rules (code: severity):
+
+- ``baseline-axis`` (error): the baseline is zero or runs along the optical axis (the seed rig's joint
+  puts the right camera 10 cm behind the left one); the message gives the corrected joint origin/pose.
+- ``baseline-offset`` (warning): a vertical or forward baseline component that costs rectified image area.
+- ``pair-resolution`` (error), ``pair-fov`` / ``pair-rate`` (warning): the two cameras differ.
+- ``camera-info`` (error/warning): a published camera_info disagrees with the description.
+- ``focal-length`` (error), ``lens-intrinsics`` (warning): ``<focalLength>`` or ``<lens><intrinsics>``
+  disagree with ``horizontal_fov``.
+- ``hack-baseline`` (error/warning/info): missing, on the wrong camera, wrong sign or wrong size.
+- ``near-clip`` (warning): the near clip plane is farther than the matcher's closest working depth.
+- ``movable-joint`` / ``optical-link`` (warning): geometry taken at joint zero; a sensor on an optical link.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
+from s2r.sources.description import CameraSpec, Description
+from s2r.sources.lint_geometry import baseline_findings
+from s2r.sources.loader import StereoPair, load_description, stereo_pair
+from s2r.sources.profile_builder import seed_matcher
+
+__all__ = ["SEVERITIES", "Finding", "lint_description"]
+
+SEVERITIES = ("error", "warning", "info")
+#: Relative focal-length difference treated as a disagreement (0.5 %, about 3 px at 640 px).
+FOCAL_REL_TOL = 0.005
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One lint finding: severity (error | warning | info), rule code, message, place and fix."""
+
+    severity: str
+    code: str
+    message: str
+    file: str
+    line: int | None
+    fix: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return asdict(self)
+
+    def one_line(self) -> str:
+        """``file:line: severity [code] message (fix: ...)``."""
+        where = f"{self.file}:{self.line}" if self.line else self.file
+        return f"{where}: {self.severity} [{self.code}] {self.message} (fix: {self.fix})"
+
+
+class _Report:
+    def __init__(self, description: Description) -> None:
+        self.description = description
+        self.findings: list[Finding] = []
+        self.xacro = description.source_text != description.expanded_text
+
+    def line(self, line: int | None, *needles: str) -> int | None:
+        """Line in the file on disk: the parsed line, or for xacro the first source line holding a needle."""
+        if not self.xacro:
+            return line
+        for needle in needles:
+            for number, text in enumerate(self.description.source_text.splitlines(), start=1):
+                if needle and needle in text:
+                    return number
+        return None
+
+    def add(self, severity: str, code: str, message: str, fix: str, line: int | None, *needles: str) -> None:
+        self.findings.append(Finding(severity, code, message, str(self.description.path),
+                                     self.line(line, *needles), fix))
+
+
+def _deg(rad: float) -> str:
+    return f"{math.degrees(rad):.1f} deg"
+
+
+def _pair_rules(report: _Report, pair: StereoPair) -> None:
+    left, right = pair.left, pair.right
+    where = right.lines.get("camera")
+    if (left.width, left.height) != (right.width, right.height):
+        report.add("error", "pair-resolution",
+                   f"cameras differ in resolution: {left.width}x{left.height} vs {right.width}x{right.height}",
+                   "give both cameras the same <image> width and height", where, "<image>")
+    if abs(left.hfov_rad - right.hfov_rad) > 1e-6:
+        report.add("warning", "pair-fov", f"cameras differ in horizontal_fov: {left.hfov_rad} rad "
+                   f"({_deg(left.hfov_rad)}) vs {right.hfov_rad} rad ({_deg(right.hfov_rad)})",
+                   "give both cameras the same <horizontal_fov>", right.lines.get("horizontal_fov"),
+                   "<horizontal_fov>")
+    if left.update_rate_hz != right.update_rate_hz:
+        report.add("warning", "pair-rate", f"cameras differ in update rate: {left.update_rate_hz} Hz vs "
+                   f"{right.update_rate_hz} Hz (frames will not pair up)", "give both sensors the same <update_rate>",
+                   right.lines.get("update_rate"), "<update_rate>")
+
+
+def _focal_rules(report: _Report, camera: CameraSpec) -> None:
+    f = focal_from_hfov(camera.width, camera.hfov_rad)
+    plugin = camera.plugin
+    if plugin is not None and plugin.focal_length and abs(plugin.focal_length - f) > FOCAL_REL_TOL * f:
+        report.add("error", "focal-length", f"camera {camera.name!r}: <focalLength> {plugin.focal_length:g} px "
+                   f"disagrees with horizontal_fov {camera.hfov_rad} rad at {camera.width} px (fx = {f:.3f} px, "
+                   f"{_deg(hfov_from_focal(camera.width, plugin.focal_length))} vs {_deg(camera.hfov_rad)})",
+                   f"set <focalLength> to {f:.3f} (or 0 to derive it), or horizontal_fov to "
+                   f"{hfov_from_focal(camera.width, plugin.focal_length):.4f}", plugin.focal_length_line,
+                   "<focalLength>", "focal_length")
+    lens = camera.lens
+    if lens is not None and (abs(lens.fx - f) > FOCAL_REL_TOL * f or abs(lens.fy - f) > FOCAL_REL_TOL * f):
+        report.add("warning", "lens-intrinsics", f"camera {camera.name!r}: <lens><intrinsics> fx {lens.fx:g} "
+                   f"fy {lens.fy:g} px disagree with horizontal_fov {camera.hfov_rad} rad (fx = {f:.3f} px): gz-sim "
+                   "renders the intrinsics, Gazebo classic the FOV", f"set horizontal_fov to "
+                   f"{hfov_from_focal(camera.width, lens.fx):.6f} or fx = fy = {f:.3f}", lens.line, "<intrinsics>")
+
+
+def _hack_rules(report: _Report, pair: StereoPair) -> None:
+    left, right = pair.left, pair.right
+    tx = float(pair.T_left_right[0, 3])
+    baseline = float(np.linalg.norm(pair.T_left_right[:3, 3]))
+    multi = left.sensor_name == right.sensor_name and right.cameras_in_sensor > 1
+    plugin = right.plugin
+    if multi:
+        if plugin is None:
+            return
+        if right.camera_name != "right":
+            report.add("error", "hack-baseline", f"the pair's right camera is named {right.camera_name!r}: "
+                       "gazebo_ros_multicamera applies hackBaseline to the camera named 'right' only",
+                       "name the right-hand camera 'right' (and the other 'left')", right.lines.get("camera"),
+                       f'name="{right.camera_name}"')
+        _hack_value(report, right, plugin.hack_baseline, tx, baseline, plugin.hack_baseline_line or plugin.line)
+        return
+    if left.plugin is not None and left.plugin.hack_baseline:
+        report.add("error", "hack-baseline", f"hackBaseline {left.plugin.hack_baseline:g} is on the LEFT camera "
+                   f"{left.name!r}: its camera_info gets P[3] = -fx * {left.plugin.hack_baseline:g}",
+                   "remove it from the left camera and put it on the right one", left.plugin.hack_baseline_line,
+                   "hackBaseline", "hack_baseline")
+    if plugin is not None:
+        _hack_value(report, right, plugin.hack_baseline, tx, baseline, plugin.hack_baseline_line or plugin.line,
+                    missing="info")
+
+
+def _hack_value(report: _Report, camera: CameraSpec, value: float | None, tx: float, baseline: float,
+                line: int | None, *, missing: str = "warning") -> None:
+    if not value:
+        report.add(missing, "hack-baseline", f"camera {camera.name!r} publishes P[3] = 0 (no hackBaseline): "
+                   "stereo_image_proc will see a zero baseline", f"add <hackBaseline>{baseline:.6g}</hackBaseline> to "
+                   "its plugin", line, "<plugin", "filename=")
+        return
+    if value * tx < 0:
+        report.add("error", "hack-baseline", f"hackBaseline {value:g} has the wrong sign: the right camera is "
+                   f"{tx:+.4f} m along the left camera's image x axis", f"use <hackBaseline>{tx:.6g}</hackBaseline>",
+                   line, "hackBaseline", "hack_baseline")
+    elif abs(abs(value) - baseline) > 0.01 * baseline:
+        report.add("warning", "hack-baseline", f"hackBaseline {value:g} m differs from the geometric baseline "
+                   f"{baseline:.6g} m", f"use <hackBaseline>{baseline:.6g}</hackBaseline>", line, "hackBaseline",
+                   "hack_baseline")
+
+
+def _clip_rules(report: _Report, pair: StereoPair) -> None:
+    baseline = float(np.linalg.norm(pair.T_left_right[:3, 3]))
+    left = pair.left
+    near = left.clip_near_m if left.clip_near_m is not None else 0.1
+    far = left.clip_far_m if left.clip_far_m is not None else 100.0
+    if baseline <= 0 or far <= near:
+        return
+    matcher = seed_matcher(focal_from_hfov(left.width, left.hfov_rad), baseline, left.width, far_limit_m=far)
+    for camera in (pair.left, pair.right):
+        cam_near = camera.clip_near_m if camera.clip_near_m is not None else 0.1
+        if cam_near > matcher.min_depth_m:
+            report.add("warning", "near-clip", f"camera {camera.name!r}: near clip {cam_near:g} m is farther than "
+                       f"the closest depth the matcher is set to see ({matcher.min_depth_m:g} m: "
+                       f"{matcher.num_disparities} disparities at fx*B)", f"set <clip><near> to at most "
+                       f"{matcher.min_depth_m:g}", camera.lines.get("clip"), "<near>")
+
+
+def _camera_info_rules(report: _Report, pair: StereoPair, info: Any) -> None:
+    name = str(getattr(info, "camera_name", "") or "")
+    camera = pair.right if (name and pair.right.matches(name)) or "right" in name.lower() else pair.left
+    width, height = int(info.width), int(info.height)
+    K = np.asarray(info.K, dtype=np.float64).reshape(3, 3)
+    line = camera.lines.get("horizontal_fov")
+    if (width, height) != (camera.width, camera.height):
+        report.add("error", "camera-info", f"camera_info is {width}x{height} but camera {camera.name!r} renders "
+                   f"{camera.width}x{camera.height}", "publish the description's resolution",
+                   camera.lines.get("camera"), "<width>")
+        return
+    f = focal_from_hfov(camera.width, camera.hfov_rad)
+    fx_info = float(K[0, 0])
+    if abs(fx_info - f) > FOCAL_REL_TOL * f:
+        report.add("error", "camera-info", f"camera_info fx {fx_info:g} px means horizontal_fov "
+                   f"{hfov_from_focal(width, fx_info):.3f} rad ({_deg(hfov_from_focal(width, fx_info))}) but camera "
+                   f"{camera.name!r} has horizontal_fov {camera.hfov_rad} rad ({_deg(camera.hfov_rad)}, fx "
+                   f"{f:.2f} px)", f"use fx = fy = {f:.2f} in the camera_info, or set horizontal_fov to "
+                   f"{hfov_from_focal(width, fx_info):.4f}", line, "<horizontal_fov>")
+    offsets = {name: (width - 1) / 2 + off for name, off in CENTRE_OFFSET_PX.items() if name != "opencv"}
+    cx = float(K[0, 2])
+    if min(abs(cx - v) for v in offsets.values()) > 0.01:
+        known = ", ".join(f"{n} {v:g}" for n, v in offsets.items())
+        report.add("warning", "camera-info", f"camera_info cx {cx:g} px matches no Gazebo convention ({known})",
+                   "check which simulator published it", line, "<horizontal_fov>")
+
+
+def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: Mapping[str, str] | None = None,
+                     package_paths: Sequence[Path] = (), left: str | None = None,
+                     right: str | None = None) -> list[Finding]:
+    """Lint a URDF / xacro / SDF stereo rig (and optionally a published camera_info against it).
+
+    Args:
+        path: the description file.
+        camera_info: an object with ``width``, ``height``, ``K`` (3x3, pixels) and optionally ``P`` (3x4)
+            and ``camera_name`` (as :func:`s2r.formats.ros.read_camera_info` returns).
+        xacro_args, package_paths: as for :func:`s2r.sources.load_description_profile`.
+        left, right: camera names when the pair is not unambiguous.
+
+    Returns:
+        Findings, errors first. Unreadable input raises :class:`~s2r.errors.SourceError` instead.
+    """
+    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths)
+    pair = stereo_pair(description, left=left, right=right)
+    report = _Report(description)
+    for joint in pair.movable_joints:
+        report.add("warning", "movable-joint", f"joint {joint.name!r} ({joint.type}) lies between the camera "
+                   "links; its position 0 is assumed", "make it fixed if the cameras are rigidly mounted",
+                   joint.line, f'name="{joint.name}"')
+    for camera in (pair.left, pair.right):
+        if camera.link_is_optical:
+            report.add("warning", "optical-link", f"sensor {camera.sensor_name!r} is on optical-frame link "
+                       f"{camera.link!r}: Gazebo renders along the link's +x, not its +z", "attach the sensor "
+                       "to the camera body link (x forward) and publish the optical frame via frameName",
+                       camera.lines.get("sensor"), f'reference="{camera.link}"')
+        _focal_rules(report, camera)
+    for severity, code, message, fix, line, needles in baseline_findings(description, pair):
+        report.add(severity, code, message, fix, line, *needles)
+    _pair_rules(report, pair)
+    _hack_rules(report, pair)
+    _clip_rules(report, pair)
+    if camera_info is not None:
+        _camera_info_rules(report, pair, camera_info)
+    order = {s: i for i, s in enumerate(SEVERITIES)}
+    return sorted(report.findings, key=lambda f: order.get(f.severity, 9))
