@@ -8,6 +8,7 @@ declared one, in units of the calibration's predicted one-sigma standard deviati
 
 from __future__ import annotations
 
+import logging
 import math
 import tempfile
 import time
@@ -53,6 +54,7 @@ class RecoveryResult:
     views_used: int
     views_rendered: int
     seconds: dict[str, float] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -63,7 +65,7 @@ class RecoveryResult:
         """Plain mapping for JSON."""
         return {"profile": self.profile, "passed": self.passed, "rms_px": self.rms_px,
                 "views_used": self.views_used, "views_rendered": self.views_rendered,
-                "seconds": self.seconds, "rows": [r.as_dict() for r in self.rows]}
+                "seconds": self.seconds, "warnings": list(self.warnings), "rows": [r.as_dict() for r in self.rows]}
 
 
 def _row(name: str, unit: str, declared: float, recovered: float, std: float | None, floor: float,
@@ -111,7 +113,14 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         boards = render_board_set(profile, out_dir / "boards", views=views, seed=seed, supersample=supersample,
                                   jobs=jobs, force=True)
         rendered = time.perf_counter()
-        calib = calibrate_stereo(boards.left_paths, boards.right_paths, name=f"{profile.name}_recovered", jobs=jobs)
+        calib_log = logging.getLogger("s2r.calib")
+        level = calib_log.level
+        calib_log.setLevel(logging.ERROR)  # coverage advice is kept in the result, not shown as warnings
+        try:
+            calib = calibrate_stereo(boards.left_paths, boards.right_paths, name=f"{profile.name}_recovered",
+                                     jobs=jobs)
+        finally:
+            calib_log.setLevel(level)
         done = time.perf_counter()
     recovered = calib.profile
     quality = recovered.provenance.calibration
@@ -121,4 +130,5 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         views_used=len(boards.left_paths) if quality is None else quality.views_used,
         views_rendered=len(boards.left_paths),
         seconds={"render_boards": rendered - start, "calibrate": done - rendered},
+        warnings=tuple(calib.warnings),
     )

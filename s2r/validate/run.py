@@ -65,7 +65,7 @@ class Settings:
 FULL = Settings(views=20, supersample=2, distances_m=(0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0),
                 scenes=("planes",))
 #: ``--quick`` settings (at most about 15 s): fewer views and planes, no supersampling.
-QUICK = Settings(views=12, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0), scenes=("planes",))
+QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0), scenes=("planes",))
 
 
 @dataclass

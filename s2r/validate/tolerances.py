@@ -59,7 +59,7 @@ class Tolerances:
     recovery_focal_rel: float = 0.003
     recovery_pp_px: float = 1.5
     recovery_baseline_rel: float = 0.005
-    recovery_rotation_deg: float = 0.1
+    recovery_rotation_deg: float = 0.2
     depth_gap_pct: float = 1.0
     fill_gap: float = 0.15
     depth_theory_factor: float = 3.0
