@@ -84,7 +84,7 @@ def read_yaml(text: str, path: str | Path) -> Any:
         where = f"line {mark.line + 1}" if mark is not None else None
         problem = getattr(exc, "problem", None) or "not valid YAML"
         raise FormatError(f"malformed YAML: {problem}", path=path, field=where) from None
-    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
+    except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
         # the safe loader's timestamp/int constructors can raise plain Python errors on odd scalars
         raise FormatError(f"malformed YAML: {exc}", path=path) from None
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from s2r.errors import FormatError
-from s2r.formats._common import first_document, read_text
+from s2r.formats._common import first_document, read_text, read_yaml
 from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr
 from s2r.formats.realsense import is_realsense_text, load_realsense
 from s2r.formats.ros import is_camera_info_mapping, load_ros_pair
@@ -42,13 +42,9 @@ def _is_s2r(data: dict[Any, Any]) -> bool:
     return "schema_version" in data or ("left" in data and "right" in data and "extrinsics" in data)
 
 
-def _yaml_mapping(text: str) -> dict[Any, Any] | None:
-    import yaml  # local: only detection needs the raw parse
-
-    try:
-        data = yaml.safe_load(first_document(text))
-    except (yaml.YAMLError, ValueError, TypeError, OverflowError, RecursionError):
-        return None
+def _yaml_mapping(text: str, path: Path) -> dict[Any, Any] | None:
+    """The first YAML document as a mapping (None when it is another YAML value); malformed: FormatError."""
+    data = read_yaml(first_document(text), path)
     return data if isinstance(data, dict) else None
 
 
@@ -65,12 +61,11 @@ def detect_format(path: str | Path) -> Format:
         return "opencv"
     if is_realsense_text(text):
         return "realsense"
-    data = _yaml_mapping(text)
+    if "schema_version" in text:
+        return "s2r"  # its own loader names a malformed line or a bad field
+    data = _yaml_mapping(text, source)
     if data is None:
-        if "schema_version" in text or "extrinsics" in text:
-            return "s2r"  # a broken s2r profile: its loader names the malformed line
-        raise FormatError(f"unrecognised content: not YAML, FileStorage or rs-enumerate-devices text ({_EXPECTED})",
-                          path=source)
+        raise FormatError(f"unrecognised content: not a YAML mapping ({_EXPECTED})", path=source)
     if _is_s2r(data):
         return "s2r"
     if is_kalibr_mapping(data):

@@ -42,7 +42,8 @@ _KNOWN_KEYS = {"camera_model", "intrinsics", "distortion_model", "distortion_coe
 
 def is_kalibr_mapping(data: Any) -> bool:
     """True when ``data`` looks like a Kalibr camchain (a ``cam0`` mapping with intrinsics)."""
-    return isinstance(data, dict) and isinstance(data.get("cam0"), dict) and "intrinsics" in data["cam0"]
+    cam0 = data.get("cam0") if isinstance(data, dict) else None
+    return isinstance(cam0, dict) and bool({"camera_model", "intrinsics", "distortion_model"} & set(cam0))
 
 
 def _camera(data: dict[Any, Any], key: str, path: Path) -> Camera:

@@ -82,12 +82,16 @@ _ECHO_KEYS = {"width": "width", "height": "height", "K": "K", "D": "D", "model":
               "P": "P"}
 
 
+def _is_parsers_layout(keys: set[str]) -> bool:
+    return bool(keys & {"camera_matrix", "projection_matrix", "rectification_matrix", "distortion_coefficients"})
+
+
 def is_camera_info_mapping(data: Any) -> bool:
     """True when ``data`` looks like a camera_info (either the parsers' YAML or rostopic echo)."""
     if not isinstance(data, dict):
         return False
     keys = {str(k) for k in data}
-    return "camera_matrix" in keys or ({"K", "P"} <= keys) or ({"k", "p"} <= keys)
+    return _is_parsers_layout(keys) or len(keys & {"K", "D", "R", "P", "k", "d", "r", "p"}) >= 2
 
 
 def _parse_mapping(text: str, path: Path) -> dict[Any, Any]:
@@ -135,7 +139,7 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
     """
     source = Path(path)
     data = _parse_mapping(read_text(source), source)
-    keys = _YAML_KEYS if "camera_matrix" in data else _ECHO_KEYS
+    keys = _YAML_KEYS if _is_parsers_layout({str(k) for k in data}) else _ECHO_KEYS
     if keys is _ECHO_KEYS:
         data = _lower_keys(data)
     width = as_int(require(data, keys["width"], source), source, keys["width"])

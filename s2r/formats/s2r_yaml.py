@@ -77,6 +77,9 @@ def read_yaml_mapping(path: str | Path) -> dict[str, Any]:
         where = f"line {mark.line + 1}" if mark is not None else None
         problem = getattr(exc, "problem", None) or "not valid YAML"
         raise ProfileError(f"malformed YAML: {problem}", path=source, field=where) from None
+    except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
+        # the safe loader's int/float/timestamp constructors raise plain errors on odd scalars (2026-13-45)
+        raise ProfileError(f"malformed YAML: {exc}", path=source) from None
     if not isinstance(data, dict):
         raise ProfileError("expected a YAML mapping at the top level", path=source, hint="is this a profile file?")
     return data
