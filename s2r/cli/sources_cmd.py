@@ -1,11 +1,129 @@
-"""CLI commands of this area (filled in by its issue)."""
+"""``s2r lint``, ``s2r profile from-urdf`` and ``s2r profile export-gazebo``: robot descriptions <-> profiles."""
 
 from __future__ import annotations
 
+import argparse
+import logging
+import sys
+from pathlib import Path
 from typing import Any
 
-__all__ = ["register"]
+from s2r.cli._common import add_force, add_json, print_json
+from s2r.errors import SourceError
+from s2r.fileio import atomic_write_text, check_output_free
+from s2r.formats.s2r_yaml import dump_profile
+from s2r.registry import load_profile
+from s2r.sources.conventions import CONVENTIONS
+from s2r.sources.gazebo_export import EXPORT_FORMATS, export_gazebo
+from s2r.sources.lint import lint_description
+from s2r.sources.profile_builder import load_description_profile
+
+__all__ = ["parse_xacro_args", "register"]
+
+EXIT_OK, EXIT_FINDINGS = 0, 1
+logger = logging.getLogger("s2r.cli")
+
+
+def parse_xacro_args(items: list[str]) -> dict[str, str]:
+    """``["name:=value", ...]`` -> mapping; SourceError naming the bad item otherwise."""
+    out: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition(":=")
+        if not sep or not name:
+            raise SourceError(f"cannot read xacro argument {item!r}", field="NAME:=VALUE",
+                              hint="write xacro arguments as name:=value after the file")
+        out[name] = value
+    return out
+
+
+def _add_description_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", type=Path, help="robot description: .urdf, .xacro / .urdf.xacro, .sdf or .world")
+    p.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments")
+    p.add_argument("--package-path", type=Path, action="append", default=[], metavar="DIR",
+                   help="folder searched for $(find pkg) (repeatable; then ROS_PACKAGE_PATH)")
+    p.add_argument("--left", default=None, help="left camera (sensor, sensor/camera, camera or link name)")
+    p.add_argument("--right", default=None, help="right camera")
 
 
 def register(sub: Any, profile_sub: Any) -> None:
-    """Add this area's subcommands."""
+    """Add ``s2r lint`` and ``s2r profile from-urdf`` / ``export-gazebo``."""
+    p_lint: argparse.ArgumentParser = sub.add_parser(
+        "lint", help="check a robot description's stereo cameras for common mistakes",
+        description="Findings with severity, file:line and the fix. Exit 1 on any error-level finding.")
+    _add_description_options(p_lint)
+    p_lint.add_argument("--camera-info", type=Path, default=None, metavar="FILE",
+                        help="a published camera_info (ROS YAML or rostopic echo text) to check against the file")
+    add_json(p_lint)
+    p_lint.set_defaults(func=_cmd_lint)
+
+    p_from: argparse.ArgumentParser = profile_sub.add_parser(
+        "from-urdf", help="a sim profile from a URDF / xacro / SDF description",
+        description="Two camera sensors (or one multicamera) to a sim stereo profile in a stated convention.")
+    _add_description_options(p_from)
+    p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
+    p_from.add_argument("--convention", choices=CONVENTIONS, default="gazebo-classic",
+                        help="pixel convention of the intrinsics (default gazebo-classic)")
+    p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
+    p_from.add_argument("--optical-links", action="store_true",
+                        help="the camera links are optical frames already (z forward); default: by link name")
+    add_force(p_from)
+    add_json(p_from)
+    p_from.set_defaults(func=_cmd_from_urdf)
+
+    p_exp: argparse.ArgumentParser = profile_sub.add_parser(
+        "export-gazebo", help="Gazebo sensor XML that makes a simulated camera match a profile",
+        description="Sensor blocks and the baseline joint/poses; warnings say what the format cannot express.")
+    p_exp.add_argument("profile", help="profile name or path")
+    p_exp.add_argument("--format", dest="fmt", choices=EXPORT_FORMATS, default="urdf",
+                       help="urdf (Gazebo classic, two sensors), sdf (classic multicamera) or gz-sim")
+    p_exp.add_argument("-o", "--output", type=Path, required=True, help="XML file to write")
+    add_force(p_exp)
+    p_exp.set_defaults(func=_cmd_export)
+
+
+def _cmd_lint(args: argparse.Namespace) -> int:
+    info = None
+    if args.camera_info is not None:
+        from s2r.formats.ros import read_camera_info
+
+        info = read_camera_info(args.camera_info)
+    findings = lint_description(args.file, camera_info=info, xacro_args=parse_xacro_args(args.xacro_args),
+                                package_paths=args.package_path, left=args.left, right=args.right)
+    errors = sum(f.severity == "error" for f in findings)
+    if args.json:
+        print_json({"file": str(args.file), "errors": errors, "findings": [f.as_dict() for f in findings]})
+    else:
+        for finding in findings:
+            print(finding.one_line())
+        counts = {s: sum(f.severity == s for f in findings) for s in ("error", "warning", "info")}
+        print(f"{args.file}: {counts['error']} error(s), {counts['warning']} warning(s), {counts['info']} info")
+    return EXIT_FINDINGS if errors else EXIT_OK
+
+
+def _cmd_from_urdf(args: argparse.Namespace) -> int:
+    check_output_free(args.output, force=args.force)
+    profile = load_description_profile(
+        args.file, convention=args.convention, left=args.left, right=args.right,
+        xacro_args=parse_xacro_args(args.xacro_args), package_paths=args.package_path, name=args.name,
+        optical=True if args.optical_links else None)
+    dump_profile(profile, args.output, force=args.force)
+    if args.json:
+        print_json({"output": str(args.output), "profile": profile})
+        return EXIT_OK
+    left = profile.left
+    t = profile.T
+    print(f"wrote {args.output}: {profile.name} ({profile.provenance.convention}) {left.width_px}x{left.height_px} "
+          f"fx {left.fx_px:.3f} fy {left.fy_px:.3f} cx {left.cx_px:.2f} cy {left.cy_px:.2f}, baseline "
+          f"{profile.baseline_m:.4f} m, T = ({t[0]:+.4f}, {t[1]:+.4f}, {t[2]:+.4f})")
+    return EXIT_OK
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    check_output_free(args.output, force=args.force)
+    profile = load_profile(args.profile)
+    text, warnings = export_gazebo(profile, fmt=args.fmt)
+    for warning in warnings:
+        logger.warning("%s", warning)
+    atomic_write_text(args.output, text, force=args.force)
+    print(f"wrote {args.output} ({args.fmt}, {len(warnings)} warning(s))", file=sys.stdout)
+    return EXIT_OK

@@ -55,7 +55,8 @@ class Finding:
     def one_line(self) -> str:
         """``file:line: severity [code] message (fix: ...)``."""
         where = f"{self.file}:{self.line}" if self.line else self.file
-        return f"{where}: {self.severity} [{self.code}] {self.message} (fix: {self.fix})"
+        fix = "" if self.fix in self.message else f" (fix: {self.fix})"
+        return f"{where}: {self.severity} [{self.code}] {self.message}{fix}"
 
 
 class _Report:
