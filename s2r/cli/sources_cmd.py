@@ -11,12 +11,13 @@ from typing import Any
 from s2r.cli._common import add_force, add_json, print_json
 from s2r.errors import SourceError
 from s2r.fileio import atomic_write_text, check_output_free
-from s2r.formats.s2r_yaml import dump_profile
+from s2r.formats.s2r_yaml import dump_profile, profile_to_yaml
 from s2r.registry import load_profile
 from s2r.sources.conventions import CONVENTIONS
 from s2r.sources.gazebo_export import EXPORT_FORMATS, export_gazebo
 from s2r.sources.lint import lint_description
 from s2r.sources.profile_builder import load_description_profile
+from s2r.sources.shipped import REPO_ROOT, shipped_profiles
 
 __all__ = ["parse_xacro_args", "register"]
 
@@ -80,6 +81,12 @@ def register(sub: Any, profile_sub: Any) -> None:
     add_force(p_exp)
     p_exp.set_defaults(func=_cmd_export)
 
+    p_regen: argparse.ArgumentParser = profile_sub.add_parser(
+        "regenerate-sim", help="regenerate the shipped sim profiles from urdf/",
+        description="Rewrite profiles/sim/*.yaml from the shipped robot descriptions (byte-reproducible).")
+    p_regen.add_argument("--check", action="store_true", help="only compare; exit 1 when a file is out of date")
+    p_regen.set_defaults(func=_cmd_regenerate)
+
 
 def _cmd_lint(args: argparse.Namespace) -> int:
     info = None
@@ -127,3 +134,16 @@ def _cmd_export(args: argparse.Namespace) -> int:
     atomic_write_text(args.output, text, force=args.force)
     print(f"wrote {args.output} ({args.fmt}, {len(warnings)} warning(s))", file=sys.stdout)
     return EXIT_OK
+
+
+def _cmd_regenerate(args: argparse.Namespace) -> int:
+    stale = 0
+    for path, profile in shipped_profiles().items():
+        text = profile_to_yaml(profile)
+        if path.exists() and path.read_text(encoding="utf-8") == text:
+            continue
+        stale += 1
+        if not args.check:
+            atomic_write_text(path, text, force=True)
+        print(f"{'stale' if args.check else 'wrote'} {path.relative_to(REPO_ROOT)}")
+    return EXIT_FINDINGS if args.check and stale else EXIT_OK
