@@ -34,7 +34,11 @@ class RectifyMaps:
 def camera_maps(
     camera: Camera, R: NDArray[np.float64], P: NDArray[np.float64], size: tuple[int, int]
 ) -> tuple[NDArray[np.int16], NDArray[np.uint16]]:
-    """Fixed-point maps rectifying one camera: float maps from initUndistortRectifyMap, then convertMaps.
+    """Fixed-point maps rectifying one camera, straight from ``initUndistortRectifyMap(..., CV_16SC2)``.
+
+    That is the seed's call; it is the same format ``convertMaps`` makes from float maps (integer part in
+    ``map1``, 1/32 px interpolation index in ``map2``), without building the float maps first, and it agrees with
+    the seed's maps to the bit (float-then-convert rounds about 0.1 % of the fractional indices differently).
 
     Args:
         camera: the raw camera (K in pixels, distortion).
@@ -43,10 +47,9 @@ def camera_maps(
         size: ``(width, height)`` of the rectified image.
     """
     if camera.distortion.model == "equidistant":
-        mx, my = cv2.fisheye.initUndistortRectifyMap(camera.K, camera.D, R, P[:, :3], size, cv2.CV_32FC1)
+        map1, map2 = cv2.fisheye.initUndistortRectifyMap(camera.K, camera.D, R, P[:, :3], size, cv2.CV_16SC2)
     else:
-        mx, my = cv2.initUndistortRectifyMap(camera.K, camera.D, R, P, size, cv2.CV_32FC1)
-    map1, map2 = cv2.convertMaps(mx, my, cv2.CV_16SC2)
+        map1, map2 = cv2.initUndistortRectifyMap(camera.K, camera.D, R, P, size, cv2.CV_16SC2)
     return np.asarray(map1, np.int16), np.asarray(map2, np.uint16)
 
 
