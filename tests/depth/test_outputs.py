@@ -27,7 +27,7 @@ def test_depth_png_round_trip(tmp_path: Path) -> None:
     path = write_depth_png(tmp_path / "depth.png", depth)
     back = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     assert back.dtype == np.uint16 and back.tolist() == [[0, 500], [2250, 10000]]
-    with pytest.raises(OutputExistsError, match="depth.png: already exists"):
+    with pytest.raises(OutputExistsError, match=r"depth.png: already exists"):
         write_depth_png(path, depth)
 
 

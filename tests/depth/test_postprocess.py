@@ -60,5 +60,5 @@ def test_speckle_removes_small_blobs() -> None:
 def test_check_stages() -> None:
     assert pp.check_stages("lr-check,median") == ("lr-check", "median")
     assert pp.check_stages([]) == ()
-    with pytest.raises(DepthError, match="postprocess: unknown post-processing stage 'x'.*speckle, lr-check"):
+    with pytest.raises(DepthError, match=r"postprocess: unknown post-processing stage 'x'.*speckle, lr-check"):
         pp.check_stages(["x"])
