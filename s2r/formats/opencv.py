@@ -44,6 +44,11 @@ __all__ = ["OpenCVStereo", "dump_opencv", "load_opencv", "opencv_to_text", "read
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
 NodeValue = FloatArray | str | float
+#: Matrix nodes of OpenCV's stereo sample and their shapes (None: any shape, checked later).
+_MATRIX_SHAPES: dict[str, tuple[int, int] | None] = {
+    "M1": (3, 3), "M2": (3, 3), "D1": None, "D2": None, "R": None, "T": None,
+    "R1": (3, 3), "R2": (3, 3), "P1": (3, 4), "P2": (3, 4), "Q": (4, 4),
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,7 +106,22 @@ def _read_nodes(path: Path) -> dict[str, NodeValue | None]:
     except Exception as exc:  # cv2.error, or SystemError wrapping it
         raise FormatError(f"malformed or truncated OpenCV FileStorage: {_cv_message(exc)}", path=path,
                           hint="re-export the file from OpenCV") from None
+    _check_matrix_nodes(nodes, path)
     return nodes
+
+
+def _check_matrix_nodes(nodes: dict[str, NodeValue | None], path: Path) -> None:
+    """Every stereo node present must be a whole matrix of its shape (a cut-off file leaves a stub)."""
+    for key, shape in _MATRIX_SHAPES.items():
+        if key not in nodes:
+            continue
+        value = nodes[key]
+        if not isinstance(value, np.ndarray) or value.size == 0:
+            raise FormatError("incomplete or not a matrix (truncated file?)", path=path, field=key,
+                              hint="re-export the file from OpenCV")
+        if shape is not None and value.shape != shape:
+            raise FormatError(f"expected a {shape[0]}x{shape[1]} matrix, got {value.shape[0]}x{value.shape[1]}",
+                              path=path, field=key)
 
 
 def _array(nodes: dict[str, NodeValue | None], key: str, path: Path) -> FloatArray | None:
