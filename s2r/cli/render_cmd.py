@@ -1,11 +1,110 @@
-"""CLI commands of this area (filled in by its issue)."""
+"""``s2r render boards | scene``: synthetic calibration sets and ground-truth depth scenes (PyBullet)."""
 
 from __future__ import annotations
 
+import argparse
+import math
 from typing import Any
 
-__all__ = ["register"]
+from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.registry import load_profile
+
+__all__ = ["SCENE_CHOICES", "register"]
+
+#: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
+SCENE_CHOICES = ("planes", "slanted", "room")
+
+
+def _pattern(text: str) -> tuple[int, int]:
+    """argparse type for ``COLSxROWS`` inner corners."""
+    cols, sep, rows = text.lower().partition("x")
+    if not sep or not cols.isdigit() or not rows.isdigit() or int(cols) < 2 or int(rows) < 2:
+        raise argparse.ArgumentTypeError(f"expected inner corners COLSxROWS such as 9x6, got {text!r}")
+    return int(cols), int(rows)
+
+
+def _distances(text: str) -> list[float]:
+    """argparse type for comma-separated distances in metres."""
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected distances in metres such as 0.5,1,2, got {text!r}") from None
+    if not values or not all(math.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected positive distances in metres such as 0.5,1,2, got {text!r}")
+    return values
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("profile", help="profile name or path")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output folder (must be empty unless --force)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same output")
+    parser.add_argument("--supersample", type=int, default=2, metavar="S",
+                        help="render at S x size and average down (default 2; TinyRenderer has no anti-aliasing)")
+    parser.add_argument("--noise", type=float, default=0.0, metavar="SIGMA",
+                        help="Gaussian sensor noise in grey levels (default 0)")
+    parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
+                        help="right camera gain relative to the left (default 1.0)")
+    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    add_force(parser)
+    add_json(parser)
 
 
 def register(sub: Any) -> None:
-    """Add this area's subcommands."""
+    """Add ``render boards`` and ``render scene``."""
+    parser = sub.add_parser("render", help="render calibration boards or ground-truth depth scenes (PyBullet)")
+    render_sub = parser.add_subparsers(dest="render_command", required=True, metavar="WHAT")
+
+    p_boards = render_sub.add_parser("boards", help="a stereo chessboard calibration set with true poses",
+                                     description="Writes DIR/left/NN.png, DIR/right/NN.png and DIR/truth.yaml.")
+    _common(p_boards)
+    p_boards.add_argument("--views", type=int, default=20, metavar="N", help="number of views (default 20)")
+    p_boards.add_argument("--pattern", type=_pattern, default=(9, 6), metavar="COLSxROWS",
+                          help="inner corners (default 9x6)")
+    p_boards.add_argument("--square", type=float, default=0.025, metavar="M", help="square size in metres")
+    p_boards.set_defaults(func=_cmd_boards)
+
+    p_scene = render_sub.add_parser(
+        "scene", help="textured scenes with ground-truth depth and rectified disparity",
+        description="Writes DIR/left/NN.png, right/NN.png, depth/NN.npy (float32 m, NaN = nothing hit), "
+        "disparity/NN.npy (float32 px, rectified left image), depth_rect/NN.npy and scene.yaml.")
+    _common(p_scene)
+    p_scene.add_argument("--scene", choices=SCENE_CHOICES, default="planes", help="scene type (default planes)")
+    p_scene.add_argument("--distances", type=_distances, default=[0.5, 1.0, 2.0, 3.0, 5.0], metavar="D1,D2,...",
+                         help="distances in metres (default 0.5,1,2,3,5)")
+    p_scene.set_defaults(func=_cmd_scene)
+
+
+def _cmd_boards(args: argparse.Namespace) -> int:
+    from s2r.render import render_board_set
+
+    profile = load_profile(args.profile)
+    bar = ProgressBar(enabled=None if not args.quiet else False)
+    result = render_board_set(
+        profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
+        supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
+        right_gain=args.right_gain,
+    )
+    if args.json:
+        print_json({"out_dir": result.out_dir, "views": len(result.poses), "truth": result.truth_path})
+    else:
+        print(f"wrote {len(result.poses)} stereo views of a {args.pattern[0]}x{args.pattern[1]} board to "
+              f"{result.out_dir} (truth: {result.truth_path.name})")
+    return 0
+
+
+def _cmd_scene(args: argparse.Namespace) -> int:
+    from s2r.render import check_output_dir, render_scene, write_scene
+
+    profile = load_profile(args.profile)
+    check_output_dir(args.out, force=args.force)
+    bar = ProgressBar(enabled=None if not args.quiet else False)
+    frames = render_scene(
+        profile, scene=args.scene, distances_m=args.distances, supersample=args.supersample, seed=args.seed,
+        noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain,
+    )
+    out = write_scene(frames, args.out, force=args.force)
+    if args.json:
+        print_json({"out_dir": out, "frames": [f.name for f in frames], "scene": args.scene})
+    else:
+        print(f"wrote {len(frames)} {args.scene} frame(s) with ground-truth depth and disparity to {out}")
+    return 0

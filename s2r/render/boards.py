@@ -1,0 +1,139 @@
+"""Synthetic stereo calibration sets: chessboard views rendered through a profile, with their true poses.
+
+Output layout (what ``s2r calibrate`` reads): ``left/NN.png``, ``right/NN.png`` (BGR, the profile's image
+size, its distortion applied) and ``truth.yaml`` holding the profile used, the board and every pose as
+``T_left_board`` (board frame -> LEFT optical frame, metres; see :mod:`s2r.render.poses` for the board frame).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from s2r.errors import RenderError
+from s2r.fileio import atomic_write_text
+from s2r.profile import StereoProfile
+from s2r.progress import ProgressCallback
+from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names
+from s2r.render.parallel import run_jobs
+from s2r.render.poses import BoardGeometry, sample_board_poses
+from s2r.render.rig import StereoJob, check_render_options, render_stereo_images, stereo_setups
+from s2r.render.textures import checkerboard_texture, write_png
+from s2r.render.world import Surface, write_mesh
+
+__all__ = ["BORDER_SQUARES", "BoardSet", "board_surface", "render_board_set"]
+
+#: Light margin around the squares, in squares (a quiet zone for the chessboard detector).
+BORDER_SQUARES = 1.0
+#: Texture resolution per board square (checker edges fall on texel boundaries, so they are exact).
+TEXELS_PER_SQUARE = 64
+
+
+@dataclass(frozen=True)
+class BoardSet:
+    """A rendered calibration set on disk.
+
+    Attributes:
+        out_dir: the set's folder.
+        left_paths, right_paths: the view images, in view order.
+        truth_path: ``truth.yaml``.
+        poses: 4x4 ``T_left_board`` per view (board frame -> left optical frame, metres).
+    """
+
+    out_dir: Path
+    left_paths: list[Path]
+    right_paths: list[Path]
+    truth_path: Path
+    poses: list[np.ndarray]
+
+
+def board_surface(tmp_dir: Path, board: BoardGeometry) -> tuple[str, str]:
+    """Write the board's texture (PNG) and mesh (OBJ, board frame) into ``tmp_dir``; return their paths."""
+    texture = checkerboard_texture(board.pattern, texels_per_square=TEXELS_PER_SQUARE,
+                                   border_squares=board.border_squares)
+    x0, y0, x1, y1 = board.extent_m
+    corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
+    mesh = write_mesh(tmp_dir / "board.obj", [(corners, (0.0, 0.0, 1.0, 1.0))])
+    return mesh, write_png(tmp_dir / "board.png", texture)
+
+
+def _check_board(pattern: tuple[int, int], square_m: float, views: int) -> None:
+    if len(pattern) != 2 or min(pattern) < 2:
+        raise RenderError(f"pattern must be two counts of inner corners >= 2, got {pattern}", field="pattern",
+                          hint="e.g. --pattern 9x6")
+    if not square_m > 0:
+        raise RenderError(f"square size must be positive, got {square_m}", field="square_m", hint="e.g. --square 0.025")
+    if views < 1:
+        raise RenderError(f"views must be at least 1, got {views}", field="views", hint="e.g. --views 20")
+
+
+def _truth(profile: StereoProfile, board: BoardGeometry, names: list[str], poses: list[NDArray[np.float64]],
+           options: dict[str, Any]) -> str:
+    data = {
+        "format": "s2r-render-boards",
+        "schema_version": 1,
+        "board_frame": "origin at the first inner corner, x along pattern columns, y along rows, z into the board",
+        "pattern": list(board.pattern),
+        "square_m": board.square_m,
+        "border_squares": board.border_squares,
+        **options,
+        "profile": profile.model_dump(mode="json", exclude_none=True),
+        "views": [
+            {"name": n, "left": f"left/{n}.png", "right": f"right/{n}.png", "T_left_board": T.tolist()}
+            for n, T in zip(names, poses, strict=True)
+        ],
+    }
+    return "# s2r rendered calibration set: ground truth (metres, OpenCV optical frames)\n" + yaml.safe_dump(
+        data, sort_keys=False, width=120)
+
+
+def render_board_set(
+    profile: StereoProfile, out_dir: str | Path, *, views: int = 20, pattern: tuple[int, int] = (9, 6),
+    square_m: float = 0.025, seed: int = 0, supersample: int = 2, noise_sigma: float = 0.0,
+    jobs: int | None = None, force: bool = False, progress: ProgressCallback | None = None,
+    right_gain: float = 1.0,
+) -> BoardSet:
+    """Render a stereo calibration set of ``views`` chessboard views through ``profile`` into ``out_dir``.
+
+    Args:
+        profile: the stereo profile whose cameras (K, distortion, size, extrinsics, clip planes) render.
+        out_dir: output folder; refused if it holds files unless ``force``.
+        views: number of board poses.
+        pattern: inner corners (columns, rows).
+        square_m: square size in metres.
+        seed: pose sampling and noise seed (same seed, same set).
+        supersample: render at this factor and average down (TinyRenderer has no anti-aliasing).
+        noise_sigma: Gaussian sensor noise, grey levels.
+        jobs: worker processes (default ``os.cpu_count()``; 1 renders in this process).
+        force: reuse a non-empty ``out_dir`` (replaces the set's own numbered files).
+        progress: ``callback(done, total, label)``.
+        right_gain: exposure/gain of the right camera relative to the left.
+    """
+    _check_board(pattern, square_m, views)
+    check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
+    board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
+    check_output_dir(out_dir, force=force)
+    poses = sample_board_poses(profile, board, views=views, seed=seed)
+    out = clear_numbered(out_dir, ("left", "right"), force=force)
+    names = numbered_names(views)
+    left_setup, right_setup = stereo_setups(profile, supersample=supersample)
+    with tempfile.TemporaryDirectory(prefix="s2r-boards-") as tmp:
+        mesh, texture = board_surface(Path(tmp), board)
+        jobs_list = [
+            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k)
+            for k, T in enumerate(poses)
+        ]
+        images = run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards")
+    left_paths, right_paths = [], []
+    for name, (left, right) in zip(names, images, strict=True):
+        left_paths.append(encode_png(out / "left" / f"{name}.png", left))
+        right_paths.append(encode_png(out / "right" / f"{name}.png", right))
+    options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain}
+    truth_path = atomic_write_text(out / "truth.yaml", _truth(profile, board, names, poses, options), force=True)
+    return BoardSet(out, left_paths, right_paths, truth_path, [np.asarray(T) for T in poses])

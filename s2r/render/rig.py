@@ -1,0 +1,83 @@
+"""The stereo rig of a profile in the render world, and the per-view render job run by worker processes.
+
+World frame = the profile's LEFT optical frame. The left camera sits at the origin; the right camera's
+pose follows the profile's OpenCV extrinsics, ``X_right = R X_left + T``, so ``T_right_world = [R | T]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.errors import RenderError
+from s2r.profile import StereoProfile
+from s2r.render.poses import clip_planes
+from s2r.render.sensor import CameraSetup, Capture, capture
+from s2r.render.world import Surface, set_world
+
+__all__ = ["StereoJob", "check_render_options", "finish_image", "render_stereo", "render_stereo_images",
+           "stereo_setups"]
+
+MAX_SUPERSAMPLE = 8
+
+
+def check_render_options(*, supersample: int, noise_sigma: float, right_gain: float = 1.0) -> None:
+    """Raise RenderError naming the option when supersample, noise or gain is out of range."""
+    if not 1 <= supersample <= MAX_SUPERSAMPLE:
+        raise RenderError(f"supersample must be 1-{MAX_SUPERSAMPLE}, got {supersample}", field="supersample",
+                          hint="2 is a good default")
+    if not noise_sigma >= 0:
+        raise RenderError(f"noise sigma must be >= 0 grey levels, got {noise_sigma}", field="noise_sigma",
+                          hint="e.g. --noise 1.5")
+    if not right_gain > 0:
+        raise RenderError(f"right gain must be positive, got {right_gain}", field="right_gain", hint="1.0 = equal")
+
+
+def stereo_setups(profile: StereoProfile, *, supersample: int) -> tuple[CameraSetup, CameraSetup]:
+    """Left and right :class:`CameraSetup` of ``profile`` (clip planes from ``profile.simulation``)."""
+    near, far = clip_planes(profile)
+    T_right_world = np.eye(4)
+    T_right_world[:3, :3], T_right_world[:3, 3] = profile.R, profile.T
+    return (CameraSetup(profile.left, np.eye(4), near, far, supersample),
+            CameraSetup(profile.right, T_right_world, near, far, supersample))
+
+
+@dataclass(frozen=True)
+class StereoJob:
+    """Everything a worker needs to render one stereo view (picklable)."""
+
+    left: CameraSetup
+    right: CameraSetup
+    surfaces: tuple[Surface, ...]
+    noise_sigma: float
+    right_gain: float
+    seed: int
+    index: int
+
+
+def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng: np.random.Generator
+                 ) -> NDArray[np.uint8]:
+    """RGB render to the BGR uint8 image a camera delivers: gain, Gaussian noise (grey levels), rounding."""
+    bgr = np.ascontiguousarray(rgb[:, :, ::-1])
+    if gain == 1.0 and noise_sigma == 0.0:
+        return bgr
+    out = bgr.astype(np.float32) * np.float32(gain)
+    if noise_sigma > 0:
+        out += rng.normal(0.0, noise_sigma, size=out.shape).astype(np.float32)
+    return np.asarray(np.clip(np.round(out), 0, 255), dtype=np.uint8)
+
+
+def render_stereo(job: StereoJob) -> tuple[Capture, Capture]:
+    """Set the world to the job's surfaces and capture both cameras (in this process)."""
+    set_world(job.surfaces)
+    return capture(job.left), capture(job.right)
+
+
+def render_stereo_images(job: StereoJob) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
+    """The job's left and right BGR uint8 images (noise seeded by ``(seed, index)``)."""
+    left, right = render_stereo(job)
+    rng = np.random.default_rng([job.seed, job.index])
+    return (finish_image(left.rgb, gain=1.0, noise_sigma=job.noise_sigma, rng=rng),
+            finish_image(right.rgb, gain=job.right_gain, noise_sigma=job.noise_sigma, rng=rng))

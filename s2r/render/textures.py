@@ -1,0 +1,64 @@
+"""Textures: a checkerboard with a white quiet zone, and seeded multi-scale random speckle.
+
+Textures are (H, W, 3) uint8 arrays (RGB). PNG files for PyBullet are written with :func:`write_png`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["checkerboard_texture", "speckle_texture", "write_png"]
+
+#: Grey levels of the checkerboard's dark and light squares (not 0/255, so noise does not clip).
+DARK, LIGHT = 20, 235
+
+
+def checkerboard_texture(
+    pattern: tuple[int, int], *, texels_per_square: int, border_squares: float
+) -> NDArray[np.uint8]:
+    """A chessboard of ``pattern`` inner corners (columns, rows) with a light border.
+
+    The board has ``pattern[0] + 1`` x ``pattern[1] + 1`` squares, the top-left one dark, surrounded by
+    ``border_squares`` squares of light margin. Returns (H, W, 3) uint8 RGB, ``texels_per_square`` per square.
+    """
+    cols, rows = pattern[0] + 1, pattern[1] + 1
+    t = texels_per_square
+    border = round(border_squares * t)
+    j, i = np.meshgrid(np.arange(cols * t) // t, np.arange(rows * t) // t)
+    board = np.where((i + j) % 2 == 0, DARK, LIGHT).astype(np.uint8)
+    board = np.pad(board, border, constant_values=LIGHT)
+    return np.repeat(board[:, :, None], 3, axis=2)
+
+
+def speckle_texture(size_px: int, *, seed: int, finest_px: float = 1.0) -> NDArray[np.uint8]:
+    """A seeded, non-repeating multi-scale speckle texture (size_px x size_px, RGB uint8).
+
+    Octaves of Gaussian-filtered white noise from ``finest_px`` texels up to 1/8 of the texture, summed with
+    equal contrast per octave, so it stays matchable whether a texel covers a tenth of a pixel or ten.
+    """
+    rng = np.random.default_rng(seed)
+    total = np.zeros((size_px, size_px), np.float32)
+    scale = finest_px
+    while scale <= size_px / 8:
+        noise = rng.standard_normal((size_px, size_px)).astype(np.float32)
+        if scale > 1.0:
+            noise = np.asarray(cv2.GaussianBlur(noise, (0, 0), sigmaX=scale / 2.0), dtype=np.float32)
+        total += noise / (float(noise.std()) + 1e-9)
+        scale *= 2.0
+    total = (total - total.mean()) / (total.std() + 1e-9)
+    grey = np.clip(128.0 + 45.0 * total, 10, 245)
+    tint = rng.uniform(0.85, 1.15, size=3).astype(np.float32)
+    rgb = np.clip(grey[:, :, None] * tint[None, None, :], 0, 255)
+    return np.asarray(np.round(rgb), dtype=np.uint8)
+
+
+def write_png(path: str | Path, rgb: NDArray[np.uint8]) -> str:
+    """Write an RGB texture as PNG (OpenCV wants BGR); returns the absolute path."""
+    out = Path(path).resolve()
+    if not cv2.imwrite(str(out), np.ascontiguousarray(rgb[:, :, ::-1])):
+        raise OSError(f"cannot write texture {out}")
+    return str(out)
