@@ -103,12 +103,13 @@ def load_kalibr(
     )
 
 
-def _camera_entry(cam: Camera, *, drop_k3: bool, label: str) -> dict[str, Any]:
+def _camera_entry(cam: Camera, *, drop_k3: bool, label: str, path: Path | None) -> dict[str, Any]:
     coeffs = [float(c) for c in cam.distortion.coefficients]
     if cam.distortion.model == "plumb_bob":
         if coeffs[4] != 0.0 and not drop_k3:
             raise FormatError(f"k3 = {coeffs[4]:g} cannot be written: Kalibr radtan has only k1 k2 r1 r2",
-                              field=f"{label}.distortion", hint="pass --drop-k3 to write it without k3 (lossy)")
+                              path=path, field=f"{label}.distortion",
+                              hint="pass --drop-k3 to write it without k3 (lossy)")
         if coeffs[4] != 0.0:
             log.warning("%s: dropping k3 = %g (Kalibr radtan has no k3); the export is lossy", label, coeffs[4])
         model, coeffs = "radtan", coeffs[:4]
@@ -116,20 +117,21 @@ def _camera_entry(cam: Camera, *, drop_k3: bool, label: str) -> dict[str, Any]:
         model = "equidistant"
     else:
         raise FormatError(f"distortion model {cam.distortion.model} has no Kalibr equivalent",
-                          field=f"{label}.distortion", hint="Kalibr supports radtan (plumb_bob) and equidistant")
+                          path=path, field=f"{label}.distortion",
+                          hint="Kalibr supports radtan (plumb_bob) and equidistant")
     if cam.skew != 0.0:
         log.warning("%s: skew %g dropped (Kalibr pinhole has no skew)", label, cam.skew)
     return {"camera_model": "pinhole", "intrinsics": [cam.fx_px, cam.fy_px, cam.cx_px, cam.cy_px],
             "distortion_model": model, "distortion_coeffs": coeffs, "resolution": [cam.width_px, cam.height_px]}
 
 
-def kalibr_to_yaml(profile: StereoProfile, *, drop_k3: bool = False) -> str:
-    """The profile as Kalibr camchain YAML text (full float precision)."""
-    cam0 = {**_camera_entry(profile.left, drop_k3=drop_k3, label="left"), "cam_overlaps": [1],
+def kalibr_to_yaml(profile: StereoProfile, *, drop_k3: bool = False, path: Path | None = None) -> str:
+    """The profile as Kalibr camchain YAML text (full float precision); ``path`` only names errors."""
+    cam0 = {**_camera_entry(profile.left, drop_k3=drop_k3, label="left", path=path), "cam_overlaps": [1],
             "rostopic": "/cam0/image_raw"}
     transform = np.eye(4)
     transform[:3, :3], transform[:3, 3] = profile.R, profile.T
-    cam1 = {"T_cn_cnm1": transform.tolist(), **_camera_entry(profile.right, drop_k3=drop_k3, label="right"),
+    cam1 = {"T_cn_cnm1": transform.tolist(), **_camera_entry(profile.right, drop_k3=drop_k3, label="right", path=path),
             "cam_overlaps": [0], "rostopic": "/cam1/image_raw"}
     header = f"# Kalibr camchain exported by s2r from profile {profile.name}\n"
     return header + yaml.safe_dump({"cam0": cam0, "cam1": cam1}, sort_keys=False, default_flow_style=None,
@@ -138,4 +140,4 @@ def kalibr_to_yaml(profile: StereoProfile, *, drop_k3: bool = False) -> str:
 
 def dump_kalibr(profile: StereoProfile, path: str | Path, *, force: bool = False, drop_k3: bool = False) -> Path:
     """Write the profile as a Kalibr camchain YAML atomically; refuses k3 != 0 unless ``drop_k3``."""
-    return atomic_write_text(path, kalibr_to_yaml(profile, drop_k3=drop_k3), force=force)
+    return atomic_write_text(path, kalibr_to_yaml(profile, drop_k3=drop_k3, path=Path(path)), force=force)
