@@ -36,8 +36,11 @@ NOISE_MAX = 0.05
 
 
 def _num(value: float) -> str:
-    text = f"{round(float(value), 12):.12g}"
-    return "0" if text in ("-0", "0") else text
+    """Shortest text that reads back as the same float (exact round trip), ``0`` for tiny values."""
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    rounded = round(float(value), 15)
+    return "0" if rounded == 0 else repr(rounded)
 
 
 def _sub(parent: ET.Element, tag: str, text: str | float | int | None = None, **attrs: str) -> ET.Element:

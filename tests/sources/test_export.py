@@ -1,0 +1,135 @@
+"""``s2r profile export-gazebo``: export then import reproduces the profile (or the format's stated limit)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from s2r.cli import main
+from s2r.formats.s2r_yaml import dump_profile
+from s2r.profile import CalibrationQuality, StereoProfile
+from s2r.registry import load_profile
+from s2r.sources import load_description_profile
+from s2r.sources.conventions import opencv_to_gazebo_distortion
+from s2r.sources.gazebo_export import export_gazebo, noise_from_residual
+from tests.conftest import make_rig
+
+SUFFIX = {"urdf": "urdf", "sdf": "sdf", "gz-sim": "sdf"}
+IMPORT_CONVENTION = {"urdf": "exact", "sdf": "exact", "gz-sim": "gz-sim"}
+
+
+def _round_trip(profile: StereoProfile, fmt: str, tmp_path: Path) -> tuple[StereoProfile, list[str]]:
+    text, warnings = export_gazebo(profile, fmt=fmt)
+    path = tmp_path / f"{profile.name}_{fmt}.{SUFFIX[fmt]}"
+    path.write_text(text)
+    return load_description_profile(path, convention=IMPORT_CONVENTION[fmt]), warnings
+
+
+@pytest.mark.parametrize("fmt", ["urdf", "sdf", "gz-sim"])
+def test_realsense_round_trip(fmt: str, tmp_path: Path) -> None:
+    real = load_profile("realsense_d435_848x480")
+    back, warnings = _round_trip(real, fmt, tmp_path)
+    assert back.left.fx_px == pytest.approx(real.left.fx_px, rel=1e-6)
+    assert back.right.fx_px == pytest.approx(real.right.fx_px, rel=1e-6)
+    assert back.baseline_m == pytest.approx(real.baseline_m, rel=1e-6)
+    assert np.allclose(back.T, real.T, atol=1e-9) and np.allclose(back.R, real.R, atol=1e-9)
+    assert back.left.distortion.is_zero and back.image_size == (848, 480)
+    if fmt == "gz-sim":  # <lens><intrinsics> carry the principal point (gz-sim pixels: OpenCV + 0.5)
+        assert (back.left.cx_px, back.left.cy_px) == (423.0, 235.5) and warnings == []
+    else:  # classic renders centred: cx 422.5 vs 423.5 and cy 235 vs 239.5 -> hypot(1.0, 4.5) = 4.61 px
+        assert len(warnings) == 2 and all("4.61 px error (-1.00, -4.50)" in w for w in warnings)
+
+
+def test_hfov_is_the_exact_inverse_of_fx() -> None:
+    text, _ = export_gazebo(load_profile("realsense_d435_848x480"), fmt="urdf")
+    hfov = float(text.split("<horizontal_fov>")[1].split("<")[0])
+    assert hfov == pytest.approx(2 * math.atan(848 / (2 * 424.0)), rel=1e-12)  # 1.570796 rad: 90 deg at fx = W/2
+
+
+def test_square_distorted_rig_round_trips_to_1e6(tmp_path: Path) -> None:
+    rig = make_rig(name="square", width=480, height=480, distortion=(-0.12, 0.05, 0.001, -0.002, 0.01),
+                   rotation_deg=(0.3, -0.5, 0.2))
+    for fmt in ("urdf", "sdf", "gz-sim"):
+        back, warnings = _round_trip(rig, fmt, tmp_path)
+        assert back.left.fx_px == pytest.approx(rig.left.fx_px, rel=1e-6)
+        assert back.baseline_m == pytest.approx(rig.baseline_m, rel=1e-6)
+        assert np.allclose(back.R, rig.R, atol=1e-9)
+        assert pytest.approx(rig.left.D, rel=1e-6, abs=1e-12) == back.left.D
+        assert not any("distortion" in w for w in warnings)
+
+
+def _displacement(coeffs: np.ndarray, w: int, h: int, f: float) -> np.ndarray:
+    u, v = np.meshgrid(np.linspace(0, w - 1, 25), np.linspace(0, h - 1, 25))
+    x, y = (u.ravel() - (w - 1) / 2) / f, (v.ravel() - (h - 1) / 2) / f
+    k1, k2, p1, p2, k3 = coeffs
+    r2 = x * x + y * y
+    radial = k1 * r2 + k2 * r2**2 + k3 * r2**3
+    return f * np.column_stack([x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+                                y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y])
+
+
+def test_non_square_distorted_rig_round_trips_within_the_stated_limit(tmp_path: Path,
+                                                                       distorted_rig: StereoProfile) -> None:
+    """640x480: Gazebo's image-normalised model is not OpenCV's; the warning states the pixel limit."""
+    back, warnings = _round_trip(distorted_rig, "sdf", tmp_path)
+    assert back.left.fx_px == pytest.approx(distorted_rig.left.fx_px, rel=1e-6)
+    assert back.baseline_m == pytest.approx(distorted_rig.baseline_m, rel=1e-6)
+    fit = opencv_to_gazebo_distortion(tuple(distorted_rig.left.D), width=640, height=480,
+                                      fx=distorted_rig.left.fx_px, fy=distorted_rig.left.fy_px)
+    assert any(f"{fit.max_px:.3f} px worst" in w for w in warnings)
+    f = distorted_rig.left.fx_px
+    moved = np.hypot(*(_displacement(back.left.D, 640, 480, f) - _displacement(distorted_rig.left.D, 640, 480, f)).T)
+    assert moved.max() <= 2 * fit.max_px  # export fit + import fit, each within the stated worst error
+    assert any("off-centre principal point" in w for w in warnings)
+
+
+def test_fx_not_fy_and_skew_warnings_state_the_error(rig: StereoProfile) -> None:
+    left = rig.left.model_copy(update={"fy_px": rig.left.fx_px * 1.01})
+    profile = rig.model_copy(update={"left": left, "right": left})
+    _, warnings = export_gazebo(profile, fmt="urdf")
+    # fy = fx is used: 240 px * |1/1.01 - 1| = 2.38 px at the top and bottom edges
+    assert any("fx 554.383 != fy 559.927" in w and "2.38 px error" in w for w in warnings)
+    _, gz_warnings = export_gazebo(profile, fmt="gz-sim")
+    assert not any("fy" in w for w in gz_warnings)
+
+
+def test_noise_from_a_calibration_residual(rig: StereoProfile) -> None:
+    cal = CalibrationQuality(pattern=(9, 6), square_m=0.025, views_used=20, rms_stereo_px=0.005)
+    profile = rig.model_copy(update={"provenance": rig.provenance.model_copy(update={"calibration": cal})})
+    text, warnings = export_gazebo(profile, fmt="sdf")
+    sigma = 0.005 * math.sqrt(66) / 1.5  # 0.02708: sigma_px * C sqrt(N) / w
+    assert noise_from_residual(0.005) == (pytest.approx(sigma), False)
+    assert float(text.split("<stddev>")[1].split("<")[0]) == pytest.approx(sigma, rel=1e-12)
+    assert any("calibration RMS 0.005 px" in w for w in warnings)
+    assert noise_from_residual(0.2)[1] is True
+
+
+def test_cli_export_refuses_to_overwrite(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "rs.urdf"
+    assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "urdf", "-o", str(out)]) == 0
+    first = out.read_text()
+    captured = capsys.readouterr()
+    assert "warning: left: off-centre principal point" in captured.err
+    assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "sdf", "-o", str(out)]) == 2
+    assert "already exists" in capsys.readouterr().err and out.read_text() == first
+    assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "sdf", "-o", str(out),
+                 "--force"]) == 0
+    assert "<sdf" in out.read_text()
+    assert main(["profile", "export-gazebo", "no_such_profile", "-o", str(tmp_path / "x.sdf")]) == 2
+
+
+def test_cli_from_urdf_then_export_then_import(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                               distorted_rig: StereoProfile) -> None:
+    src = dump_profile(distorted_rig, tmp_path / "rig.yaml")
+    xml = tmp_path / "rig.sdf"
+    assert main(["profile", "export-gazebo", str(src), "--format", "gz-sim", "-o", str(xml)]) == 0
+    out = tmp_path / "back.yaml"
+    assert main(["profile", "from-urdf", str(xml), "-o", str(out), "--convention", "gz-sim"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    back = load_profile(out)
+    assert back.left.fx_px == pytest.approx(distorted_rig.left.fx_px, rel=1e-6)
+    assert back.left.cx_px == pytest.approx(distorted_rig.left.cx_px + 0.5, abs=1e-9)
+    assert main(["profile", "from-urdf", str(xml), "-o", str(out)]) == 2  # exists, no --force
