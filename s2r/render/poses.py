@@ -26,7 +26,9 @@ FloatArray = NDArray[np.float64]
 FILL_NEAR, FILL_FAR, FILL_MAX = 0.60, 0.25, 0.90
 #: Smallest square, pixels: on a fronto-parallel board, and after tilt in any sampled view.
 MIN_FRONTAL_SQUARE_PX, MIN_SQUARE_PX = 12.0, 8.0
-MAX_TILT_DEG, MAX_ROLL_DEG, MAX_VIEW_ANGLE_DEG = 45.0, 10.0, 70.0
+MAX_TILT_DEG, MAX_VIEW_ANGLE_DEG = 45.0, 70.0
+#: In-plane roll range: never near 0, because pixel-aligned edges alias worst (no anti-aliasing).
+MIN_ROLL_DEG, MAX_ROLL_DEG = 8.0, 30.0
 _EDGE_MARGIN_PX = 3.0
 _ATTEMPTS = 60
 
@@ -150,7 +152,7 @@ def sample_board_poses(profile: StereoProfile, board: BoardGeometry, *, views: i
 
     View k aims the board centre at one of 9 image positions (corners, edge midpoints, centre; shuffled by
     the seed, with jitter), at a log-stratified distance, tilted by a stratified angle up to 45 deg about a
-    random in-plane axis and rolled up to 10 deg. A candidate that does not fit both images is pulled
+    random in-plane axis and rolled 8-30 deg either way. A candidate that does not fit both images is pulled
     toward the image centre, then un-tilted and moved back, until it fits.
     """
     lo, hi = distance_range_m(profile, board)
@@ -169,7 +171,7 @@ def sample_board_poses(profile: StereoProfile, board: BoardGeometry, *, views: i
         angle = math.radians(rng.uniform(band, band + 1) * MAX_TILT_DEG / 3.0)
         phi = rng.uniform(0.0, 2.0 * math.pi)
         axis = np.array([math.cos(phi), math.sin(phi), 0.0])
-        roll = math.radians(rng.uniform(-MAX_ROLL_DEG, MAX_ROLL_DEG))
+        roll = math.radians(rng.uniform(MIN_ROLL_DEG, MAX_ROLL_DEG) * rng.choice([-1.0, 1.0]))
         for attempt in range(_ATTEMPTS):
             shrink = max(0.0, 1.0 - attempt / 20.0)
             relax = 0.9 ** max(0, attempt - 20)
