@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -173,15 +174,15 @@ class StereoPipeline:
 
     def match(self, rect_left: Image, rect_right: Image, geo: _Geometry) -> NDArray[np.int16]:
         """Fixed-point disparity (int16, px * 16) of a rectified pair after the post-processing stages."""
-        matcher = self._matchers(geo.config)
-        raw: NDArray[np.int16] = matcher.compute(rect_left, rect_right)
-        if not self.postprocess:
-            return raw
+        # The right image's disparity (for lr-check) runs on a second thread beside the left one: OpenCV
+        # releases the GIL and MODE_SGBM uses one core, so the check costs little extra wall time on 2 cores.
+        right_job = (_right_pool().submit(self._right_disparity, rect_left, rect_right, geo)
+                     if "lr-check" in self.postprocess else None)
+        raw: NDArray[np.int16] = self._matchers(geo.config).compute(rect_left, rect_right)
         invalid = (geo.config.min_disparity - 1) * 16
         for stage in self.postprocess:
-            if stage == "lr-check":
-                flipped = matcher.compute(cv2.flip(rect_right, 1), cv2.flip(rect_left, 1))
-                raw = pp.lr_check(raw, cv2.flip(flipped, 1), invalid=invalid,
+            if stage == "lr-check" and right_job is not None:
+                raw = pp.lr_check(raw, right_job.result(), invalid=invalid,
                                   blind_px=geo.config.min_disparity + geo.config.num_disparities)
             elif stage == "speckle":
                 raw = pp.speckle(raw, invalid=invalid, window_px=geo.config.speckle_window_size)
@@ -193,6 +194,11 @@ class StereoPipeline:
                 raw = pp.fill_background(raw, invalid=invalid)
         return raw
 
+    def _right_disparity(self, rect_left: Image, rect_right: Image, geo: _Geometry) -> NDArray[np.int16]:
+        """Fixed-point disparity of the RIGHT image (x_left = x_right + d): the flipped pair matched as usual."""
+        flipped = self._matchers(geo.config).compute(cv2.flip(rect_right, 1), cv2.flip(rect_left, 1))
+        return np.asarray(cv2.flip(flipped, 1), np.int16)
+
     def compute(self, left: Any, right: Any) -> DepthResult:
         """Depth of one raw (unrectified) stereo pair of the profile's size (grey or BGR uint8 arrays)."""
         rl, rr, geo = self.rectify(left, right)
@@ -200,6 +206,17 @@ class StereoPipeline:
         disparity, depth, valid = to_metric(raw, geo.rectification, min_disparity=geo.config.min_disparity)
         return DepthResult(rect_left=rl, rect_right=rr, disparity=disparity, depth=depth, valid=valid,
                            Q=geo.rectification.Q)
+
+
+_POOL: list[ThreadPoolExecutor] = []
+_POOL_LOCK = threading.Lock()
+
+
+def _right_pool() -> ThreadPoolExecutor:
+    with _POOL_LOCK:
+        if not _POOL:
+            _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="s2r-lr-check"))
+        return _POOL[0]
 
 
 def to_metric(
