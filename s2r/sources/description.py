@@ -70,6 +70,7 @@ class PluginSpec:
     filename: str
     hack_baseline: float | None = None
     hack_baseline_line: int | None = None
+    hack_baseline_tag: str = ""
     focal_length: float | None = None
     focal_length_line: int | None = None
     frame_name: str | None = None

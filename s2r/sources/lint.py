@@ -135,6 +135,11 @@ def _hack_rules(report: _Report, pair: StereoPair) -> None:
                        "name the right-hand camera 'right' (and the other 'left')", right.lines.get("camera"),
                        f'name="{right.camera_name}"')
         _hack_value(report, right, plugin.hack_baseline, tx, baseline, plugin.hack_baseline_line or plugin.line)
+        if plugin.hack_baseline and plugin.hack_baseline_tag == "hack_baseline":
+            report.add("warning", "hack-baseline", "<hack_baseline> (ROS 2 spelling): ROS 2 gazebo_ros applies it to "
+                       "EVERY camera of the sensor, so the left camera_info also gets P[3] = -fx * baseline",
+                       "check the left camera_info's P[3] (it should be 0), or publish the pair from two camera "
+                       "sensors", plugin.hack_baseline_line, "hack_baseline")
         return
     if left.plugin is not None and left.plugin.hack_baseline:
         report.add("error", "hack-baseline", f"hackBaseline {left.plugin.hack_baseline:g} is on the LEFT camera "

@@ -121,6 +121,7 @@ def _plugin(doc: XmlDoc, sensor: ET.Element) -> PluginSpec | None:
     return PluginSpec(
         filename=node.get("filename", ""), line=doc.line(node),
         hack_baseline=read_float(doc, hack), hack_baseline_line=doc.line(hack),
+        hack_baseline_tag="" if hack is None else hack.tag,
         focal_length=read_float(doc, focal), focal_length_line=doc.line(focal),
         frame_name=None if frame is None else (frame.text or "").strip() or None,
         camera_name=None if name is None else (name.text or "").strip() or None,

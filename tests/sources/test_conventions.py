@@ -43,7 +43,7 @@ def test_hfov_from_focal_is_the_exact_inverse() -> None:
 ])
 def test_principal_point_per_convention(convention: str, cx: float, cy: float) -> None:
     k = intrinsics_for(640, 480, 1.047, convention)
-    assert (k.fx, k.fy) == (pytest.approx(F_SEED), pytest.approx(F_SEED))
+    assert k.fx == pytest.approx(F_SEED) and k.fy == pytest.approx(F_SEED)
     assert (k.cx, k.cy) == (cx, cy)
 
 
@@ -90,8 +90,8 @@ def test_non_square_conversion_reports_its_true_pixel_error() -> None:
     gz = (-0.25, 0.08, 0.0, 0.0, 0.0)
     fit = gazebo_to_opencv_distortion(*gz, width=w, height=h, fx=f, fy=f)
     assert fit.max_px > 0.01  # not exact ...
-    u, v = np.meshgrid(np.linspace(0, w - 1, 25), np.linspace(0, h - 1, 25))
-    u, v = u.ravel(), v.ravel()
+    grid_u, grid_v = np.meshgrid(np.linspace(0, w - 1, 25), np.linspace(0, h - 1, 25))
+    u, v = grid_u.ravel(), grid_v.ravel()
     cx, cy = (w - 1) / 2, (h - 1) / 2
     rays = np.column_stack([(u - cx) / f, (v - cy) / f, np.ones_like(u)])
     K = np.array([[f, 0, cx], [0, f, cy], [0, 0, 1.0]])

@@ -19,9 +19,9 @@ def _cli_error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
     return err
 
 
-def _check(path: Path, capsys: pytest.CaptureFixture[str], *needles: str, extra: tuple[str, ...] = ()) -> None:
+def _check(path: Path, capsys: pytest.CaptureFixture[str], *needles: str) -> None:
     with pytest.raises(SourceError) as info:
-        load_description_profile(path, **({"left": extra[0], "right": extra[1]} if extra else {}))
+        load_description_profile(path)
     message = str(info.value)
     assert "\n" not in message and str(path) in message
     for needle in needles:

@@ -115,6 +115,9 @@ def test_hack_baseline_rules(tmp_path: Path) -> None:
     assert ("error", "hack-baseline") in [(f.severity, f.code) for f in wrong_sign]
     size = _lint(tmp_path, xbot.replace("<hackBaseline>0.06", "<hackBaseline>0.07"), "z.sdf")
     assert [(f.severity, f.code) for f in size] == [("warning", "hack-baseline")]
+    ros2 = _lint(tmp_path, xbot.replace("hackBaseline", "hack_baseline"), "r2.sdf")
+    assert [(f.severity, f.code) for f in ros2] == [("warning", "hack-baseline")]
+    assert "EVERY camera" in ros2[0].message
     renamed = _lint(tmp_path, xbot.replace('name="left"', 'name="cam_a"').replace('name="right"', 'name="cam_b"'),
                     "n.sdf", left="cam_a", right="cam_b")
     assert any(f.code == "hack-baseline" and "named 'cam_b'" in f.message for f in renamed)
