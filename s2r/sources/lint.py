@@ -185,6 +185,26 @@ def _clip_rules(report: _Report, pair: StereoPair) -> None:
                        f"{matcher.min_depth_m:g}", camera.lines.get("clip"), "<near>")
 
 
+def _camera_info_tx(report: _Report, pair: StereoPair, camera: CameraSpec, info: Any, line: int | None) -> None:
+    """P[0, 3] = -fx * B on the right camera only (ROS stereo convention)."""
+    P = getattr(info, "P", None)
+    if P is None:
+        return
+    P = np.asarray(P, dtype=np.float64).reshape(3, 4)
+    if P[0, 0] <= 0 or P[0, 3] == 0:
+        return
+    implied = -float(P[0, 3]) / float(P[0, 0])
+    baseline = float(np.linalg.norm(pair.T_left_right[:3, 3]))
+    if camera is pair.left:
+        report.add("warning", "camera-info", f"the left camera_info has P[3] = {P[0, 3]:g} (baseline {implied:g} m); "
+                   "the left camera of a ROS stereo pair has P[3] = 0", "apply hackBaseline to the right camera only",
+                   line, "<horizontal_fov>")
+    elif abs(implied - baseline) > 0.01 * baseline:
+        report.add("warning", "camera-info", f"camera_info P[3] = {P[0, 3]:g} means a {implied:g} m baseline; the "
+                   f"description's is {baseline:.6g} m", f"publish P[3] = {-P[0, 0] * baseline:.6g}", line,
+                   "<horizontal_fov>")
+
+
 def _camera_info_rules(report: _Report, pair: StereoPair, info: Any) -> None:
     name = str(getattr(info, "camera_name", "") or "")
     camera = pair.right if (name and pair.right.matches(name)) or "right" in name.lower() else pair.left
@@ -204,6 +224,7 @@ def _camera_info_rules(report: _Report, pair: StereoPair, info: Any) -> None:
                    f"{camera.name!r} has horizontal_fov {camera.hfov_rad} rad ({_deg(camera.hfov_rad)}, fx "
                    f"{f:.2f} px)", f"use fx = fy = {f:.2f} in the camera_info, or set horizontal_fov to "
                    f"{hfov_from_focal(width, fx_info):.4f}", line, "<horizontal_fov>")
+    _camera_info_tx(report, pair, camera, info, line)
     offsets = {name: (width - 1) / 2 + off for name, off in CENTRE_OFFSET_PX.items() if name != "opencv"}
     cx = float(K[0, 2])
     if min(abs(cx - v) for v in offsets.values()) > 0.01:

@@ -63,6 +63,18 @@ def test_camera_info_with_other_resolution_or_centre(tmp_path: Path) -> None:
     assert [f.severity for f in found] == ["warning"] and "matches no Gazebo convention" in found[0].message
 
 
+def test_camera_info_tx_against_the_baseline() -> None:
+    f = 554.3827128226441
+    P = np.array([[f, 0, 320.5, -f * 0.12], [0, f, 240.5, 0], [0, 0, 1, 0]])
+    K = P[:, :3]
+    right = type("Info", (), {"width": 640, "height": 480, "K": K, "P": P, "camera_name": "right"})()
+    found = [f for f in lint_description(FIXED_URDF, camera_info=right) if f.code == "camera-info"]
+    assert len(found) == 1 and "0.12 m baseline" in found[0].message and "0.1 m" in found[0].message
+    left = type("Info", (), {"width": 640, "height": 480, "K": K, "P": P, "camera_name": "left"})()
+    found = [f for f in lint_description(FIXED_URDF, camera_info=left) if f.code == "camera-info"]
+    assert len(found) == 1 and "left camera_info has P[3]" in found[0].message
+
+
 def test_zero_baseline(tmp_path: Path) -> None:
     findings = _lint(tmp_path, two_camera_urdf(right_xyz="0 0 0"))
     assert _codes(findings, "error") == ["baseline-axis"] and "zero baseline" in findings[0].message

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from s2r.cli import main as cli_main
 from s2r.geometry import R_LINK_OPTICAL
 from s2r.sources import load_description, load_description_profile
 from s2r.sources.kinematics import KinematicTree
@@ -128,7 +129,8 @@ def test_sensor_and_camera_poses_are_applied(tmp_path: Path) -> None:
     assert pytest.approx([-0.07, 0, -0.2], abs=1e-12) == p.T
 
 
-def test_xacro_macros_with_arguments_and_find(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_xacro_macros_with_arguments_and_find(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
     pkg = tmp_path / "ws" / "src" / "my_cams"
     write(pkg, "package.xml", "<package><name>my_cams</name></package>\n")
     write(pkg, "urdf/camera.xacro", """<?xml version="1.0"?>
@@ -156,6 +158,9 @@ def test_xacro_macros_with_arguments_and_find(tmp_path: Path, monkeypatch: pytes
     p = load_description_profile(main, xacro_args={"baseline": "0.24"}, package_paths=[tmp_path / "ws"])
     assert pytest.approx([-0.24, 0, 0], abs=1e-12) == p.T
     assert "baseline:=0.24" in p.provenance.notes
+    out = tmp_path / "rig.yaml"
+    argv = ["profile", "from-urdf", str(main), "baseline:=0.3", "--package-path", str(tmp_path / "ws"), "-o", str(out)]
+    assert cli_main(argv) == 0 and "T = (-0.3000, +0.0000, +0.0000)" in capsys.readouterr().out
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "ws" / "src"))
     assert pytest.approx([-0.1, 0, 0], abs=1e-12) == load_description_profile(main).T
 
