@@ -127,7 +127,12 @@ def load_any(
     fmts = [detect_format(p) for p in files]
     if len(files) == 2:
         return _load_pair(files, fmts, name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m)
-    source, fmt = files[0], fmts[0]
+    return _load_single(files[0], fmts[0], name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m,
+                        resolution=resolution)
+
+
+def _load_single(source: Path, fmt: Format, *, name: str | None, origin: str, image_size: tuple[int, int] | None,
+                 t_scale_m: float, resolution: tuple[int, int] | None) -> StereoProfile:
     if fmt == "s2r":
         return _renamed(load_profile_file(source), name)
     if fmt == "ros":
@@ -136,7 +141,7 @@ def load_any(
         raise FormatError("a camera_info file holds one camera; a stereo profile needs two", path=source,
                           hint="pass the left and the right camera_info files together")
     if fmt == "opencv":
-        from s2r.formats.opencv import load_opencv
+        from s2r.formats.opencv import load_opencv  # local: OpenCV loads only when needed
 
         return load_opencv(source, image_size=image_size, t_scale_m=t_scale_m, name=name, origin=origin)
     if fmt == "kalibr":
