@@ -78,7 +78,7 @@ class PluginSpec:
     line: int | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CameraSpec:
     """One camera of a sensor (a multicamera sensor has several), as written in the description.
 
@@ -122,7 +122,7 @@ class CameraSpec:
         return query in names
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class JointSpec:
     """A joint: ``T_parent_child`` is the child link's pose in the parent link at joint position zero."""
 

@@ -43,6 +43,19 @@ def test_realsense_round_trip(fmt: str, tmp_path: Path) -> None:
         assert len(warnings) == 2 and all("4.61 px error (-1.00, -4.50)" in w for w in warnings)
 
 
+@pytest.mark.parametrize("name", ["gazebo_dual_camera", "xbot_u_stereo"])
+def test_sim_profiles_round_trip_exactly(name: str, tmp_path: Path) -> None:
+    sim = load_profile(name)
+    for fmt in ("urdf", "sdf"):
+        text, warnings = export_gazebo(sim, fmt=fmt)
+        assert warnings == []  # a gazebo-classic profile is expressible in Gazebo classic
+        path = tmp_path / f"{name}.{fmt}"
+        path.write_text(text)
+        back = load_description_profile(path)  # gazebo-classic, like the shipped profile
+        assert back.left == sim.left.model_copy(update={"frame_id": back.left.frame_id})
+        assert np.allclose(back.T, sim.T, atol=1e-12) and back.simulation == sim.simulation
+
+
 def test_hfov_is_the_exact_inverse_of_fx() -> None:
     text, _ = export_gazebo(load_profile("realsense_d435_848x480"), fmt="urdf")
     hfov = float(text.split("<horizontal_fov>")[1].split("<")[0])
