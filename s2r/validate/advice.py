@@ -108,6 +108,6 @@ def suggest_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow],
                           f"{sim.baseline_m * 1000:.1f} -> {real.baseline_m * 1000:.1f} mm); multicamera "
                           f"plugin <hackBaseline>{real.baseline_m:g}</hackBaseline>"))
     if edits:
-        edits.append(Edit("all of the above", sim.name, real.name,
-                          f"s2r profile export-gazebo {real.name} writes the matching sensor XML"))
+        edits.append(Edit("sensor XML", sim.name, real.name,
+                          f"s2r profile export-gazebo {real.name} -o {real.name}.urdf.xml"))
     return edits

@@ -134,39 +134,48 @@ def within_stats(truth: FloatArray, rel: FloatArray, max_m: float = 3.0, *,
     return _stats(lo, max_m, rel[truth <= max_m], profile)
 
 
-def _middle_frame(frames: Sequence[Any]) -> int:
+def _sample_index(frames: Sequence[Any]) -> int:
+    """The frame shown in the report: a slanted (or room) frame if any, else the plane nearest 1.5 m."""
+    for preferred in ("slanted", "room"):
+        found = [i for i, f in enumerate(frames) if f.description.get("scene") == preferred]
+        if found:
+            return found[len(found) // 2]
     return min(range(len(frames)), key=lambda i: abs(float(np.nanmedian(frames[i].depth_rect_m)) - 1.5))
 
 
-def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile", scenes: Sequence[str] = ("planes",),
-                           distances_m: Sequence[float] = (0.5, 1.0, 2.0, 3.0, 5.0),
+def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
+                           scenes: Sequence[tuple[str, Sequence[float]]] = (("planes", (0.5, 1.0, 2.0, 3.0, 5.0)),),
                            bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M, supersample: int = 2,
                            seed: int = 0, jobs: int | None = 1) -> DepthAccuracy:
-    """Render ``scenes`` at ``distances_m`` through ``profile``, run the depth pipeline with ``preset``, score."""
+    """Render each ``(scene, distances_m)`` through ``profile``, run the depth pipeline with ``preset``, score.
+
+    Every frame's pixels are pooled and binned by true depth (metres, rectified left frame).
+    """
     from s2r.depth.pipeline import StereoPipeline
     from s2r.render.scenes import render_scene
 
     start = time.perf_counter()
     frames = []
-    for scene in scenes:
-        frames += render_scene(profile, scene=scene, distances_m=tuple(distances_m), supersample=supersample,
+    for scene, distances in scenes:
+        frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
                                seed=seed, jobs=jobs)
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None
-    keep = _middle_frame(frames)
+    keep = _sample_index(frames)
     for i, frame in enumerate(frames):
         result = pipeline.compute(frame.left, frame.right)
         t, r = pixel_errors(result.depth, frame.depth_rect_m, frame.disparity_rect_px)
         truths.append(t)
         rels.append(r)
         if i == keep:
-            samples = DepthSamples(frame.name, frame.left, np.asarray(result.rect_left), result.depth,
-                                   frame.depth_rect_m)
+            samples = DepthSamples(f"{frame.description.get('scene', '')} {frame.name}", frame.left,
+                                   np.asarray(result.rect_left), result.depth, frame.depth_rect_m)
     matched = time.perf_counter()
     truth, rel = np.concatenate(truths), np.concatenate(rels)
     return DepthAccuracy(
-        profile=profile.name, preset=preset, scenes=tuple(scenes), distances_m=tuple(float(d) for d in distances_m),
+        profile=profile.name, preset=preset, scenes=tuple(name for name, _ in scenes),
+        distances_m=tuple(sorted({float(d) for _, ds in scenes for d in ds})),
         bins=bin_stats(truth, rel, bins, profile=profile), within_3m=within_stats(truth, rel, 3.0, profile=profile),
         samples=samples, seconds={"render_scenes": rendered - start, "depth_pipeline": matched - rendered},
     )

@@ -140,22 +140,30 @@ def _pct(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.2f} %"
 
 
+def _show(ax: Any, image: Any, title: str, **kwargs: Any) -> Any:
+    shown = ax.imshow(image[..., ::-1] if image.ndim == 3 else image, **kwargs)
+    ax.set_title(title)
+    ax.axis("off")
+    return shown
+
+
 def _samples_figure(role: str, acc: DepthAccuracy) -> str:
     s = acc.samples
     assert s is not None
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.0))
+    fig, axes = plt.subplots(1, 5, figsize=(17, 3.0))
     finite = s.truth_m[np.isfinite(s.truth_m)]
-    vmax = float(np.max(finite)) * 1.1 if finite.size else 5.0
-    axes[0].imshow(s.left[..., ::-1] if s.left.ndim == 3 else s.left, cmap="gray")
-    rect = s.rect_left
-    axes[1].imshow(rect[..., ::-1] if rect.ndim == 3 else rect, cmap="gray")
-    axes[2].imshow(s.depth_m, cmap="turbo", vmin=0, vmax=vmax)
-    im = axes[3].imshow(s.truth_m, cmap="turbo", vmin=0, vmax=vmax)
-    for ax, title in zip(axes, ("rendered left", "rectified left", "pipeline depth", "true depth"), strict=True):
-        ax.set_title(title)
-        ax.axis("off")
-    fig.colorbar(im, ax=axes, label="depth (m)", shrink=0.8)
-    fig.suptitle(f"{role}: {acc.profile}, frame {s.name}")
+    lo, hi = (float(np.min(finite)), float(np.max(finite))) if finite.size else (0.0, 5.0)
+    span = dict(cmap="turbo", vmin=lo - 0.05 * (hi - lo + 0.1), vmax=hi + 0.05 * (hi - lo + 0.1))
+    _show(axes[0], s.left, "rendered left", cmap="gray")
+    _show(axes[1], s.rect_left, "rectified left", cmap="gray")
+    _show(axes[2], s.depth_m, "pipeline depth", **span)
+    depth_im = _show(axes[3], s.truth_m, "true depth", **span)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = 100.0 * (s.depth_m - s.truth_m) / s.truth_m
+    err_im = _show(axes[4], rel, "relative error (%)", cmap="coolwarm", vmin=-2.0, vmax=2.0)
+    fig.colorbar(depth_im, ax=axes[3], label="depth (m)", shrink=0.8)
+    fig.colorbar(err_im, ax=axes[4], label="%", shrink=0.8)
+    fig.suptitle(f"{role}: {acc.profile}, frame {s.name} (NaN = white/transparent)")
     return figure_to_data_uri(fig)
 
 
@@ -169,12 +177,15 @@ def _edits(result: ValidationResult) -> ReportSection:
     if not result.edits:
         return ReportSection("What to change", paragraphs=["Nothing: the sim parameters match within tolerance."])
     rows = [[e.parameter, e.current, e.target, e.where] for e in result.edits]
-    section = ReportSection("What to change in the sim", tables=[html_table(["parameter", "now", "set to", "where"],
-                                                                             rows)])
-    if result.gazebo_xml:
-        section.paragraphs.append("Sensor XML for the real camera (<code>s2r profile export-gazebo</code>):"
-                                  f"<pre>{html.escape(result.gazebo_xml)}</pre>")
-    return section
+    table = html_table(["parameter", "now", "set to", "where"], rows)
+    return ReportSection("What to change in the sim", tables=[table],
+                         paragraphs=["Edits to the robot description that remove each parameter difference beyond "
+                                     "tolerance; the sensor XML at the end of this page has them all."])
+
+
+def _xml(result: ValidationResult) -> ReportSection:
+    return ReportSection("Sensor XML for the real camera (s2r profile export-gazebo)",
+                         paragraphs=[f"<pre>{html.escape(result.gazebo_xml or '')}</pre>"])
 
 
 def build_sections(result: ValidationResult) -> list[ReportSection]:
@@ -187,6 +198,8 @@ def build_sections(result: ValidationResult) -> list[ReportSection]:
         sections.append(_recovery(result))
     if result.depth:
         sections += [_depth(result), _samples(result)]
+    if result.gazebo_xml:
+        sections.append(_xml(result))
     return sections
 
 

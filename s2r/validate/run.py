@@ -44,12 +44,24 @@ RESOLUTION_DISTANCES_M = (0.5, 1.0, 2.0, 3.0, 5.0)
 
 @dataclass(frozen=True)
 class Settings:
-    """How much work each stage does: board views, supersampling, scene distances (metres) and scenes."""
+    """How much work each stage does: board views, supersampling, the distances (metres) of the
+    fronto-parallel planes, and further ``(scene, distances)`` pairs ("slanted", "room")."""
+
+    @property
+    def scenes(self) -> tuple[tuple[str, tuple[float, ...]], ...]:
+        """Every ``(scene, distances_m)`` rendered for depth accuracy, the planes first."""
+        return (("planes", self.distances_m), *self.extra_scenes)
+
+    @property
+    def all_distances_m(self) -> tuple[float, ...]:
+        """Every distance of every scene, metres, sorted."""
+        return tuple(sorted({d for _, ds in self.scenes for d in ds}))
+
 
     views: int
     supersample: int
     distances_m: tuple[float, ...]
-    scenes: tuple[str, ...]
+    extra_scenes: tuple[tuple[str, tuple[float, ...]], ...] = ()
     preset: str = "profile"
     seed: int = 0
     bins_m: tuple[tuple[float, float], ...] = DEFAULT_BINS_M
@@ -57,15 +69,15 @@ class Settings:
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON."""
         return {"views": self.views, "supersample": self.supersample, "distances_m": list(self.distances_m),
-                "scenes": list(self.scenes), "preset": self.preset, "seed": self.seed,
+                "scenes": {name: list(ds) for name, ds in self.scenes}, "preset": self.preset, "seed": self.seed,
                 "bins_m": [list(b) for b in self.bins_m]}
 
 
 #: Default settings (at most about 60 s for two profiles on 2 cores).
-FULL = Settings(views=20, supersample=2, distances_m=(0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0),
-                scenes=("planes",))
+FULL = Settings(views=20, supersample=2, distances_m=(0.6, 0.9, 1.25, 1.75, 2.25, 2.75, 3.5, 4.5),
+                extra_scenes=(("slanted", (1.25, 2.5)),))
 #: ``--quick`` settings (at most about 15 s): fewer views and planes, no supersampling.
-QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0), scenes=("planes",))
+QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0))
 
 
 @dataclass
@@ -138,14 +150,13 @@ def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances
     if kind == "recovery":
         return recover_calibration(profile, tol, views=settings.views, supersample=settings.supersample,
                                    seed=settings.seed, jobs=1)
-    return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes,
-                                  distances_m=settings.distances_m, bins=settings.bins_m,
+    return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes, bins=settings.bins_m,
                                   supersample=settings.supersample, seed=settings.seed, jobs=1)
 
 
 def _run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Tolerances, jobs: int,
                progress: ProgressCallback | None) -> dict[tuple[str, str], Any]:
-    tasks = [(kind, role) for kind in ("recovery", "depth") for role in roles]
+    tasks = [(kind, role) for kind in ("depth", "recovery") for role in roles]  # longest first
     results: dict[tuple[str, str], Any] = {}
     report(progress, 0, len(tasks), "validate")
     if jobs <= 1:
@@ -216,7 +227,7 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
     tol = Tolerances() if tolerances is None else tolerances
     roles = {"sim": sim, "real": real} if real is not None else {"profile": sim}
     for profile in roles.values():
-        check_distances(profile, settings.preset, settings.distances_m)
+        check_distances(profile, settings.preset, settings.all_distances_m)
     result = ValidationResult(roles=roles, settings=settings, tolerances=tol)
     start = time.perf_counter()
     _static_stages(result, sim, real)

@@ -52,20 +52,19 @@ def _recovery_lines(result: ValidationResult) -> list[str]:
 
 def _depth_lines(result: ValidationResult) -> list[str]:
     roles = list(result.depth)
-    head = "  bin       " + "".join(f"| {role[:8]:<8} med%   p90%  bias%  fill " for role in roles) + "| theory%"
-    lines = [head]
+    head = f"  {'bin':<9}" + "".join(f"| {role[:5]:<5} med%  p90%  bias%  fill " for role in roles)
+    lines = [head + "| theory% at far end (" + "/".join(roles) + ")"]
     for i, b in enumerate(result.depth[roles[0]].bins):
-        text = f"  {b.lo_m:g}-{b.hi_m:g} m".ljust(12)
+        text = f"  {f'{b.lo_m:g}-{b.hi_m:g} m':<9}"
         for role in roles:
             s = result.depth[role].bins[i]
             fill = "-" if s.fill_rate is None else f"{s.fill_rate:.0%}"
-            text += f"|          {_value(s.median_pct, 3):>5} {_value(s.p90_pct, 3):>6} {_value(s.bias_pct, 2):>6} "
-            text += f"{fill:>4} "
+            text += f"| {_value(s.median_pct, 3):>10} {_value(s.p90_pct, 3):>5} {_value(s.bias_pct, 2):>6} {fill:>5} "
         theory = "/".join(f"{result.depth[r].bins[i].theory_hi_pct or 0:.2f}" for r in roles)
         lines.append(text + f"| {theory}")
-    claim = ", ".join(f"{role} {_value(acc.within_3m.median_pct, 3)} % (fill {acc.within_3m.fill_rate or 0:.0%})"
-                      for role, acc in result.depth.items())
-    lines.append(f"  median |error| within 3 m ({result.settings.preset} preset): {claim}")
+    claim = ", ".join(f"{role} {_value(acc.within_3m.median_pct, 3)} % (p90 {_value(acc.within_3m.p90_pct, 3)} %, "
+                      f"fill {acc.within_3m.fill_rate or 0:.0%})" for role, acc in result.depth.items())
+    lines.append(f"  median |error| within 3 m, preset {result.settings.preset}: {claim}")
     return lines
 
 
@@ -74,9 +73,13 @@ def _verdict_lines(result: ValidationResult) -> list[str]:
         return [f"PASS: all {len(result.checks)} checks within tolerance"]
     failures = result.failures
     lines = [f"FAIL: {len(failures)} of {len(result.checks)} checks beyond tolerance:"]
-    lines += [f"  - {c.text}" for c in failures[:_MAX_FAILURES]]
-    if len(failures) > _MAX_FAILURES:
-        lines.append(f"  ... and {len(failures) - _MAX_FAILURES} more (--json lists every check)")
+    params = [c.name for c in failures if c.section == "parameters"]
+    if params:
+        lines.append(f"  - parameters differ: {', '.join(params)}")
+    others = [c.text for c in failures if c.section != "parameters"]
+    lines += [f"  - {text}" for text in others[:_MAX_FAILURES]]
+    if len(others) > _MAX_FAILURES:
+        lines.append(f"  ... and {len(others) - _MAX_FAILURES} more (--json lists every check)")
     return lines
 
 
@@ -96,6 +99,10 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Depth accuracy (rendered planes, |relative error|):", *_depth_lines(result)]
     if result.edits:
         lines.append("To make the sim match the real camera:")
-        lines += [f"  {e.parameter}: {e.current} -> {e.target}  [{e.where}]" for e in result.edits]
+        for e in result.edits:
+            if e.parameter == "sensor XML":
+                lines.append(f"  write them: {e.where}")
+            else:
+                lines.append(f"  {e.parameter}: {e.current} -> {e.target}  [{e.where}]")
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
     return [*lines, *_verdict_lines(result), f"({timing})"]

@@ -55,7 +55,7 @@ def test_edits_for_the_seed_rig_against_the_realsense() -> None:
     centred = make_rig(width=848, height=480, hfov_rad=math.pi / 2, baseline_m=0.05)
     assert "principal point" not in {e.parameter for e in suggest_edits(
         sim, centred, parameter_table(sim, centred, Tolerances()))}
-    assert "export-gazebo realsense_d435_848x480" in edits["all of the above"].where
+    assert "export-gazebo realsense_d435_848x480" in edits["sensor XML"].where
 
 
 def test_no_edits_when_profiles_match() -> None:
