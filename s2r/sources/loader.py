@@ -57,6 +57,7 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
                           hint="expected a URDF <robot> or an <sdf> document")
     description.source_text, description.expanded_text = text, expanded
+    KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
 
 

@@ -130,8 +130,8 @@ def expand_xacro(
     except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
         cause = _root_cause(exc)
         if isinstance(cause, PackageNotFound):
-            raise SourceError(f"$(find {cause.package}): package {cause.package!r} not found", path=path,
-                              field="$(find)", hint=_FIND_HINT) from None
+            raise SourceError(f"package {cause.package!r} not found in any package folder", path=path,
+                              field=f"$(find {cause.package})", hint=_FIND_HINT) from None
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise SourceError(f"xacro expansion failed: {detail}", path=path, field="xacro",
                           hint="fix the xacro file or pass the missing name:=value arguments") from None

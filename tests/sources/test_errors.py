@@ -54,6 +54,12 @@ def test_joint_loop(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     _check(write(tmp_path, "loop.urdf", text), capsys, "joint loop", "'ab'", "'ba'", "re-parent")
 
 
+def test_joint_loop_is_reported_before_the_cameras(tmp_path: Path) -> None:
+    text = urdf(["a", "b"], [joint("ab", "a", "b"), joint("ba", "b", "a")], {"a": sensor("only_one")})
+    with pytest.raises(SourceError, match="joint loop"):
+        load_description_profile(write(tmp_path, "loop1.urdf", text))
+
+
 def test_link_with_two_parents(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     text = urdf(["a", "b", "c"], [joint("ac", "a", "c"), joint("bc", "b", "c")], {"a": sensor("x"), "c": sensor("y")})
     _check(write(tmp_path, "two.urdf", text), capsys, "joint loop", "child of both 'ac' and 'bc'")
@@ -84,7 +90,8 @@ def test_unresolved_find(tmp_path: Path, capsys: pytest.CaptureFixture[str], mon
     monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
     path = write(tmp_path, "find.urdf.xacro", '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
                  '<xacro:include filename="$(find no_such_pkg)/urdf/cam.xacro"/></robot>\n')
-    _check(path, capsys, "$(find no_such_pkg)", "'no_such_pkg' not found", "--package-path DIR", "ROS_PACKAGE_PATH")
+    _check(path, capsys, "find.urdf.xacro: $(find no_such_pkg): package 'no_such_pkg' not found", "--package-path DIR",
+           "ROS_PACKAGE_PATH")
 
 
 def test_missing_file_and_bad_xacro_argument(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
