@@ -195,7 +195,7 @@ def build_camera(
     if K[0, 0] <= 0 or K[1, 1] <= 0:
         raise FormatError(
             f"focal length must be positive, got fx={K[0, 0]:g} fy={K[1, 1]:g}", path=path, field=field,
-            hint="an all-zero camera matrix means the camera was never calibrated",
+            hint="focal lengths are in pixels; all zeros means the camera was never calibrated",
         )
     width, height = size
     if not (0.0 <= K[0, 2] <= width and 0.0 <= K[1, 2] <= height):

@@ -137,23 +137,33 @@ def _extrinsic_block(lines: list[str], start: int, path: Path) -> RealSenseExtri
     return RealSenseExtrinsic(source=head["a"], target=head["b"], R=np.array(rows), t=np.array(t), line=start + 1)
 
 
-def parse_realsense(path: str | Path) -> tuple[list[RealSenseIntrinsic], list[RealSenseExtrinsic]]:
-    """Every intrinsic and extrinsic block of an ``rs-enumerate-devices -c`` text file."""
+def parse_realsense(
+    path: str | Path, *, streams: set[str] | None = None
+) -> tuple[list[RealSenseIntrinsic], list[RealSenseExtrinsic]]:
+    """The intrinsic and extrinsic blocks of an ``rs-enumerate-devices -c`` text file.
+
+    Args:
+        streams: read only blocks of these streams (others, e.g. a damaged Color block, are skipped);
+            None reads every block.
+    """
     source = Path(path)
     lines = read_text(source).splitlines()
     intrinsics: list[RealSenseIntrinsic] = []
     extrinsics: list[RealSenseExtrinsic] = []
     for index, line in enumerate(lines):
-        if _INTRINSIC.search(line):
+        head = _INTRINSIC.search(line)
+        if head and (streams is None or head["name"] in streams):
             block = _intrinsic_block(lines, index, source)
             if block is not None:
                 intrinsics.append(block)
-        elif _EXTRINSIC.search(line):
+        ext_head = _EXTRINSIC.search(line)
+        if ext_head and (streams is None or {ext_head["a"], ext_head["b"]} <= streams):
             ext = _extrinsic_block(lines, index, source)
             if ext is not None:
                 extrinsics.append(ext)
     if not intrinsics:
-        raise FormatError('no "Intrinsic of" blocks found', path=source,
+        wanted = "" if streams is None else f" of {', '.join(sorted(streams))}"
+        raise FormatError(f'no "Intrinsic of" blocks{wanted} found', path=source,
                           hint="save the output of `rs-enumerate-devices -c` (with -c)")
     return intrinsics, extrinsics
 
@@ -241,7 +251,7 @@ def load_realsense(
         left, right: the stream names of the left and right imagers.
     """
     source = Path(path)
-    intrinsics, extrinsics = parse_realsense(source)
+    intrinsics, extrinsics = parse_realsense(source, streams={left, right})
     size = _resolution(intrinsics, left, right, resolution, source)
     lcam = _camera(_pick(intrinsics, left, size), source, "camera_infra1_optical_frame")
     rcam = _camera(_pick(intrinsics, right, size), source, "camera_infra2_optical_frame")

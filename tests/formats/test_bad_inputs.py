@@ -125,15 +125,15 @@ def _missing_second_file(tmp: Path) -> Case:
 def _realsense_missing(tmp: Path) -> Case:
     path = tmp / "rs.txt"
     path.write_text((DATA / "rs_enumerate_devices_d435.txt").read_text().replace(
-        "  Fx:         \t424.691284179688\n", "", 1))
-    return [str(path)], path, ['"Depth" 848x480: Fx', "field is missing"]
+        "  Fx:         \t424.691284179688\n", "", 2))  # the Depth and the Infrared 1 block
+    return [str(path)], path, ['"Infrared 1" 848x480: Fx', "field is missing"]
 
 
 def _realsense_nan(tmp: Path) -> Case:
     path = tmp / "rs.txt"
     text = (DATA / "rs_enumerate_devices_d435.txt").read_text()
-    path.write_text(text.replace("PPX:        \t422.885070800781", "PPX:        \tnan", 3))
-    return [str(path)], path, ["PPX", "must be a finite number, got nan"]
+    path.write_text(text.replace("PPX:        \t422.885070800781", "PPX:        \tnan", 2))
+    return [str(path)], path, ['"Infrared 1" 848x480: PPX', "must be a finite number, got nan"]
 
 
 def _single_camera_info(tmp: Path) -> Case:

@@ -34,6 +34,7 @@ BASES: dict[str, str] = {
     "ros": camera_info_to_yaml(_LEFT),
     "kalibr": kalibr_to_yaml(RIG),
     "echo": (DATA / "gazebo_left_camera_info.txt").read_text(),
+    "realsense": (DATA / "rs_enumerate_devices_d435.txt").read_text(),  # text mutations only
 }
 RIGHT_TEXT = camera_info_to_yaml(_RIGHT)
 SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
@@ -100,11 +101,13 @@ def textual(draw: st.DrawFn, text: str) -> bytes:
 
 def mutated(kind: str) -> st.SearchStrategy[bytes]:
     text = BASES[kind]
+    if kind == "realsense":
+        return textual(text)
     return st.one_of(structural(text).map(lambda t: t.encode("utf-8")), textual(text))
 
 
 def _write(folder: Path, kind: str, content: bytes) -> list[str]:
-    path = folder / ("left.yaml" if kind == "ros" else f"{kind}.yaml")
+    path = folder / ("left.yaml" if kind == "ros" else f"{kind}.txt")
     path.write_bytes(content)
     if kind in ("ros", "echo"):
         right = folder / "right.yaml"

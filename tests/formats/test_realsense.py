@@ -86,3 +86,12 @@ def test_missing_extrinsic_and_unsupported_distortion(tmp_path: Path) -> None:
     bad.write_text(text.replace("Brown Conrady\n  Coeffs:     \t0  ", "Ftheta\n  Coeffs:     \t0.3  "))
     with pytest.raises(FormatError, match=r'"Infrared 1" 848x480: Distortion: distortion model \'Ftheta\''):
         load_realsense(bad)
+
+
+def test_damaged_blocks_of_other_streams_are_ignored(tmp_path: Path) -> None:
+    text = FIXTURE.read_text()
+    damaged = tmp_path / "colour_damaged.txt"
+    damaged.write_text(text.replace("  Fx:         \t610.463928222656\n", "  Fx:         \tbroken\n"))
+    assert load_realsense(damaged).left.fx_px == pytest.approx(424.691284179688)
+    with pytest.raises(FormatError, match=r'"Color" 640x480: Fx: expected numbers, got \'broken\''):
+        parse_realsense(damaged)
