@@ -39,7 +39,9 @@ def parse_xacro_args(items: list[str]) -> dict[str, str]:
 
 def _add_description_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", type=Path, help="robot description: .urdf, .xacro / .urdf.xacro, .sdf or .world")
-    p.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments")
+    p.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments, right after FILE")
+    p.add_argument("--arg", dest="xacro_more", action="append", default=[], metavar="NAME:=VALUE",
+                   help="a xacro argument anywhere on the line (repeatable)")
     p.add_argument("--package-path", type=Path, action="append", default=[], metavar="DIR",
                    help="folder searched for $(find pkg) (repeatable; then ROS_PACKAGE_PATH)")
     p.add_argument("--left", default=None, help="left camera (sensor, sensor/camera, camera or link name)")
@@ -94,8 +96,9 @@ def _cmd_lint(args: argparse.Namespace) -> int:
         from s2r.formats.ros import read_camera_info
 
         info = read_camera_info(args.camera_info)
-    findings = lint_description(args.file, camera_info=info, xacro_args=parse_xacro_args(args.xacro_args),
-                                package_paths=args.package_path, left=args.left, right=args.right)
+    xacro_args = parse_xacro_args(args.xacro_args + args.xacro_more)
+    findings = lint_description(args.file, camera_info=info, xacro_args=xacro_args, package_paths=args.package_path,
+                                left=args.left, right=args.right)
     errors = sum(f.severity == "error" for f in findings)
     if args.json:
         print_json({"file": str(args.file), "errors": errors, "findings": [f.as_dict() for f in findings]})
@@ -111,7 +114,7 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
     check_output_free(args.output, force=args.force)
     profile = load_description_profile(
         args.file, convention=args.convention, left=args.left, right=args.right,
-        xacro_args=parse_xacro_args(args.xacro_args), package_paths=args.package_path, name=args.name,
+        xacro_args=parse_xacro_args(args.xacro_args + args.xacro_more), package_paths=args.package_path, name=args.name,
         optical=True if args.optical_links else None)
     dump_profile(profile, args.output, force=args.force)
     if args.json:

@@ -51,7 +51,7 @@ def test_cli_from_urdf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert "fx 320.255" in printed and "cx 320.50 cy 240.50" in printed and "T = (-0.0600, +0.0000, +0.0000)" in printed
     out2 = tmp_path / "seed.yaml"
     assert main(["profile", "from-urdf", str(SEED_URDF), "baseline_xyz:=0 -0.12 0", "--convention", "exact",
-                 "--name", "seed_fixed", "-o", str(out2), "--json"]) == 0
+                 "--name", "seed_fixed", "-o", str(out2), "--json", "--arg", "width:=640"]) == 0
     assert '"output"' in capsys.readouterr().out
     p = load_profile(out2)
     assert p.name == "seed_fixed" and p.T.tolist() == pytest.approx([-0.12, 0, 0]) and p.left.cx_px == 319.5
