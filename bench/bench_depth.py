@@ -6,8 +6,8 @@ For every preset, plain OpenCV = what a user writes by hand with the same maps a
 grey presets), two ``cv2.remap`` with fixed-point maps, one ``compute``, and the usual ``raw / 16`` float
 conversion. The pipeline does the same plus input checks, NaN marking and depth. Runs alternate (pipeline, plain,
 pipeline, ...) so machine load hits both alike; figures are medians. Then the full preset (its default
-post-processing) in frames per second, and sequence mode throughput (read PNG, compute, write outputs) serial
-against the threaded stages.
+post-processing) in frames per second, sequence mode throughput (read PNG, compute, write outputs) serial
+against the threaded stages, and the median relative depth error on rendered planes beside Intel's RMS model.
 """
 
 from __future__ import annotations
@@ -134,16 +134,46 @@ def bench_sequence(frames: int) -> None:
                   f"(x{rates[1] * serial / frames:.2f})", flush=True)
 
 
+def bench_planes(distances: tuple[float, ...]) -> None:
+    """Median absolute relative depth error on rendered fronto-parallel planes, beside Intel's RMS model."""
+    try:
+        from s2r.render.scenes import render_scene
+    except ImportError:
+        print("rendered planes: s2r.render.scenes not available")
+        return
+    profile = bench_profile()
+    frames = render_scene(profile, scene="planes", distances_m=distances, supersample=2, jobs=2)
+    print(f"rendered planes through {profile.name} (fx {profile.left.fx_px}, B {profile.baseline_m} m): median "
+          "|Z - Z_true| / Z_true in %, density % in brackets; Intel model RMS(Z) / Z = Z s / (fx B), s = 0.08 px")
+    print(f"{'preset':11} " + " ".join(f"{d:>13.1f}m" for d in distances))
+    intel = [100 * float(profile.depth_rms_m(d)) / d for d in distances]
+    print(f"{'Intel model':11} " + " ".join(f"{v:14.3f}" for v in intel))
+    for preset in PRESETS:
+        pipe = StereoPipeline(profile, preset=preset)
+        cells = []
+        for frame in frames:
+            result = pipe.compute(frame.left, frame.right)
+            known = np.isfinite(frame.depth_rect_m)
+            ok = result.valid & known
+            rel = np.abs(result.depth[ok] - frame.depth_rect_m[ok]) / frame.depth_rect_m[ok]
+            med = 100 * float(np.median(rel)) if rel.size else float("nan")
+            cells.append(f"{med:7.3f} ({100 * ok.sum() / max(known.sum(), 1):3.0f})")
+        print(f"{preset:11} " + " ".join(f"{c:>14}" for c in cells), flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30)
     parser.add_argument("--frames", type=int, default=40)
     parser.add_argument("--num-disparities", type=int, help="override every preset's disparity range")
+    parser.add_argument("--no-planes", action="store_true", help="skip the rendered-planes accuracy table")
     args = parser.parse_args()
     logging.basicConfig(level=logging.ERROR)
     print(f"OpenCV {cv2.__version__}, {cv2.getNumberOfCPUs()} CPUs, {cv2.getNumThreads()} OpenCV threads")
     bench_presets(args.repeat, args.num_disparities)
     bench_sequence(args.frames)
+    if not args.no_planes:
+        bench_planes((0.5, 1.0, 2.0, 3.0, 5.0))
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ import pytest
 from s2r.depth.names import PRESETS
 from s2r.depth.pipeline import DepthResult, StereoPipeline
 from s2r.errors import DepthError
-from s2r.profile import StereoProfile
+from s2r.profile import Distortion, StereoProfile
 from s2r.rectification import stereo_rectification
 from tests.conftest import make_rig
 from tests.depth.synth import SynthPair, make_pair
@@ -178,3 +178,16 @@ def test_compute_is_thread_safe(small_rig: StereoProfile) -> None:
         t.join()
     for i in range(4):
         np.testing.assert_array_equal(out[i], serial[i])
+
+
+def test_fisheye_profile_uses_fisheye_maps(pair: SynthPair) -> None:
+    rig = make_rig(name="fisheye_rig", width=320, height=240)
+    cam = rig.left.model_copy(update={"distortion": Distortion(model="equidistant", coefficients=(0.0,) * 4)})
+    fisheye = rig.model_copy(update={"left": cam, "right": cam})
+    pipe = StereoPipeline(fisheye, preset="fast", num_disparities=48)
+    K_new = pipe.rectification.P1[:, :3]
+    expected, _ = cv2.fisheye.initUndistortRectifyMap(cam.K, cam.D, pipe.rectification.R1, K_new, (320, 240),
+                                                      cv2.CV_16SC2)
+    np.testing.assert_array_equal(pipe.maps.left_map1, expected)
+    result = pipe.compute(pair.left, pair.right)
+    assert result.valid.mean() > 0.5
