@@ -251,7 +251,9 @@ def load_opencv(
                     float(np.linalg.norm(T)))
     return build_stereo(
         name=name or first.stem, left=_camera(data, 1, size), right=_camera(data, 2, size), R=data.R, T=T,
-        path=data.paths[-1], provenance=provenance_for(data.paths, "OpenCV FileStorage", origin=origin),
+        path=data.paths[-1], provenance=provenance_for(
+            data.paths, "OpenCV FileStorage", origin=origin,
+            notes="" if t_scale_m == 1.0 else f"T multiplied by {t_scale_m:g} (metres per unit of the file's T)"),
         description=f"imported from OpenCV FileStorage {', '.join(p.name for p in data.paths)}",
     )
 

@@ -72,6 +72,7 @@ def test_real_sample_intrinsics_with_an_extrinsics_file(tmp_path: Path) -> None:
     assert rig.baseline_m == pytest.approx(0.0836, abs=2e-4)  # |T| about 83.6 mm at 25 mm squares
     assert rig.left.D.tolist()[:2] == pytest.approx([0.29589439552724328, -1.0354662043042675])
     assert [s.path for s in rig.provenance.sources] == [str(intrinsics), str(extrinsics)]
+    assert rig.provenance.notes == "T multiplied by 0.025 (metres per unit of the file's T)"
 
 
 def test_truncated_files_give_one_line_errors(tmp_path: Path) -> None:

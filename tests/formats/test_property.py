@@ -37,7 +37,7 @@ BASES: dict[str, str] = {
     "realsense": (DATA / "rs_enumerate_devices_d435.txt").read_text(),  # text mutations only
 }
 RIGHT_TEXT = camera_info_to_yaml(_RIGHT)
-SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
+SETTINGS = settings(max_examples=150, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow])
 
 _SAFE_TEXT = st.text(alphabet=st.characters(blacklist_categories=("Cs",)), max_size=8)
@@ -138,7 +138,7 @@ def test_mutated_files_raise_only_s2r_errors(kind: str) -> None:
     check()
 
 
-@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.too_slow])
 @given(kind=st.sampled_from(sorted(BASES)), data=st.data())
 def test_cli_on_mutated_files_exits_0_or_2_with_one_error_line(kind: str, data: st.DataObject) -> None:
     content = data.draw(mutated(kind))
