@@ -130,3 +130,14 @@ def test_pair_without_baseline_names_tx(tmp_path: Path) -> None:
     left, _ = dump_ros_pair(make_rig(), tmp_path / "ros")
     with pytest.raises(FormatError, match=r"projection_matrix: P\[0,3\] \(Tx\) is 0"):
         load_ros_pair(left, left)
+
+
+def test_vertical_rig_puts_the_baseline_in_ty_and_round_trips(tmp_path: Path) -> None:
+    data = make_rig(distortion=(-0.1, 0.01, 0.0, 0.0, 0.0)).model_dump()
+    data["extrinsics"]["translation_m"] = (0.002, -0.1, 0.001)  # right camera below the left one
+    rig = StereoProfile.model_validate(data)
+    left, right = dump_ros_pair(rig, tmp_path / "ros")
+    info = read_camera_info(right)
+    assert info.P[0, 3] == 0.0
+    assert info.P[1, 3] == pytest.approx(-info.P[1, 1] * rig.baseline_m, rel=1e-12)
+    assert_same_rig(load_ros_pair(left, right), rig)
