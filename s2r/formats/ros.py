@@ -12,6 +12,7 @@ Import inverts this: with ``P = K' [I | t]`` for each camera, points in the rect
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -48,6 +49,7 @@ __all__ = [
     "ros_pair_from_profile",
 ]
 
+log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
 
 
@@ -200,6 +202,9 @@ def load_ros_pair(
         raise FormatError("P[0,3] (Tx) is 0 in both files: no baseline between the cameras", path=rpath,
                           field="projection_matrix", hint="the right camera's Tx must be -fx' * baseline; "
                           "pass the left file first and the right file second")
+    if T[0] > 0 and abs(T[0]) >= abs(T[1]):
+        log.warning("%s: the second camera sits to the LEFT of the first (T_x = %+.4f m); pass the left camera's "
+                    "file first", rpath, T[0])
     base = name or (left.camera_name.split("/")[0] if left.camera_name else lpath.parent.name or lpath.stem)
     return build_stereo(
         name=base, left=_camera(left, lpath), right=_camera(right, rpath), R=R, T=T, path=rpath,

@@ -141,3 +141,11 @@ def test_vertical_rig_puts_the_baseline_in_ty_and_round_trips(tmp_path: Path) ->
     assert info.P[0, 3] == 0.0
     assert info.P[1, 3] == pytest.approx(-info.P[1, 1] * rig.baseline_m, rel=1e-12)
     assert_same_rig(load_ros_pair(left, right), rig)
+
+
+def test_swapped_pair_warns(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    left, right = dump_ros_pair(make_rig(), tmp_path / "ros")
+    with caplog.at_level("WARNING", logger="s2r"):
+        swapped = load_ros_pair(right, left)
+    assert swapped.T[0] == pytest.approx(0.1)
+    assert "second camera sits to the LEFT of the first" in caplog.text
