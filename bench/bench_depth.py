@@ -72,8 +72,8 @@ def plain_opencv(pipe: StereoPipeline) -> Callable[[NDArray[np.uint8], NDArray[n
 
 def alternate(a: Callable[[], object], b: Callable[[], object], repeat: int
               ) -> tuple[float, float, float, float]:
-    """Median and minimum seconds of ``a`` and ``b`` (a_med, b_med, a_min, b_min), run alternately ``repeat``
-    times each after one warm-up."""
+    """Median seconds of ``a`` and ``b``, the median of the per-round ratios a/b (each round runs a then b back to
+    back, so load bursts hit both) and the ratio of the minima: (a_med, b_med, ratio_paired, ratio_min)."""
     a(), b()
     ta, tb = [], []
     for _ in range(repeat):
@@ -84,25 +84,26 @@ def alternate(a: Callable[[], object], b: Callable[[], object], repeat: int
         t2 = time.perf_counter()
         ta.append(t1 - t0)
         tb.append(t2 - t1)
-    return statistics.median(ta), statistics.median(tb), min(ta), min(tb)
+    paired = statistics.median(x / y for x, y in zip(ta, tb, strict=True)) if tb[0] > 0 else float("nan")
+    return statistics.median(ta), statistics.median(tb), paired, min(ta) / max(min(tb), 1e-12)
 
 
 def bench_presets(repeat: int, num_disparities: int | None) -> None:
     profile = bench_profile()
     left, right = textured_pair()
-    print(f"640x480 BGR input, {repeat} alternating runs (ms, median and min); ratio = pipeline core / plain "
-          "OpenCV; full = the preset with its default post-processing, fps from its median")
+    print(f"640x480 BGR input, {repeat} alternating runs, median ms; ratio = pipeline core / plain OpenCV (median "
+          "of back-to-back pairs, and of the minima); full = the preset with its default post-processing")
     print(f"{'preset':11} {'ndisp':>5} {'plain':>7} {'core':>7} {'ratio':>6} {'(min)':>6}   {'full':>7} {'fps':>6}  "
           "post")
     for preset in PRESETS:
         core = StereoPipeline(profile, preset=preset, postprocess=(), num_disparities=num_disparities)
         plain = plain_opencv(core)
-        t_core, t_plain, m_core, m_plain = alternate(lambda p=core: p.compute(left, right),
-                                                     lambda f=plain: f(left, right), repeat)
+        t_core, t_plain, ratio, ratio_min = alternate(lambda p=core: p.compute(left, right),
+                                                      lambda f=plain: f(left, right), repeat)
         full = StereoPipeline(profile, preset=preset, num_disparities=num_disparities)
         t_full = alternate(lambda p=full: p.compute(left, right), lambda: None, repeat)[0]
         print(f"{preset:11} {core.config.num_disparities:5d} {1e3 * t_plain:7.2f} {1e3 * t_core:7.2f} "
-              f"{t_core / t_plain:6.3f} {m_core / m_plain:6.3f}   {1e3 * t_full:7.2f} {1 / t_full:6.1f}  "
+              f"{ratio:6.3f} {ratio_min:6.3f}   {1e3 * t_full:7.2f} {1 / t_full:6.1f}  "
               f"{'+'.join(full.postprocess) or '-'}", flush=True)
 
 
