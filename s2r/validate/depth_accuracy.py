@@ -8,6 +8,7 @@ share of those the pipeline returns a depth for.
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
@@ -16,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.errors import RenderError
 from s2r.profile import StereoProfile
 from s2r.validate.resolution import theory_rel_rms
 
@@ -26,6 +28,7 @@ __all__ = ["DEFAULT_BINS_M", "BinStats", "DepthAccuracy", "DepthSamples", "bin_s
 DEFAULT_BINS_M: tuple[tuple[float, float], ...] = ((0.5, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 5.0))
 
 FloatArray = NDArray[np.float64]
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -155,10 +158,18 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
     from s2r.render.scenes import render_scene
 
     start = time.perf_counter()
-    frames = []
-    for scene, distances in scenes:
-        frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
-                               seed=seed, jobs=jobs)
+    frames: list[Any] = []
+    rendered_scenes: list[tuple[str, Sequence[float]]] = []
+    for k, (scene, distances) in enumerate(scenes):
+        try:
+            frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
+                                   seed=seed, jobs=jobs)
+        except RenderError as exc:
+            if k == 0:
+                raise
+            log.warning("%s: %s scene skipped: %s", profile.name, scene, exc)  # extra scenes are optional
+            continue
+        rendered_scenes.append((scene, distances))
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None
@@ -174,8 +185,8 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
     matched = time.perf_counter()
     truth, rel = np.concatenate(truths), np.concatenate(rels)
     return DepthAccuracy(
-        profile=profile.name, preset=preset, scenes=tuple(name for name, _ in scenes),
-        distances_m=tuple(sorted({float(d) for _, ds in scenes for d in ds})),
+        profile=profile.name, preset=preset, scenes=tuple(name for name, _ in rendered_scenes),
+        distances_m=tuple(sorted({float(d) for _, ds in rendered_scenes for d in ds})),
         bins=bin_stats(truth, rel, bins, profile=profile), within_3m=within_stats(truth, rel, 3.0, profile=profile),
         samples=samples, seconds={"render_scenes": rendered - start, "depth_pipeline": matched - rendered},
     )

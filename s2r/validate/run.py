@@ -75,7 +75,7 @@ class Settings:
 
 #: Default settings (at most about 60 s for two profiles on 2 cores).
 FULL = Settings(views=20, supersample=2, distances_m=(0.6, 0.9, 1.25, 1.75, 2.25, 2.75, 3.5, 4.5),
-                extra_scenes=(("slanted", (1.25, 2.5)),))
+                extra_scenes=(("slanted", (1.5,)),))
 #: ``--quick`` settings (at most about 15 s): fewer views and planes, no supersampling.
 QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0))
 

@@ -52,14 +52,14 @@ def _recovery_lines(result: ValidationResult) -> list[str]:
 
 def _depth_lines(result: ValidationResult) -> list[str]:
     roles = list(result.depth)
-    head = f"  {'bin':<9}" + "".join(f"| {role[:5]:<5} med%  p90%  bias%  fill " for role in roles)
+    head = f"  {'bin':<9}" + "".join(f"| {role[:7]:<7} med%  p90%  bias%  fill " for role in roles)
     lines = [head + "| theory% at far end (" + "/".join(roles) + ")"]
     for i, b in enumerate(result.depth[roles[0]].bins):
         text = f"  {f'{b.lo_m:g}-{b.hi_m:g} m':<9}"
         for role in roles:
             s = result.depth[role].bins[i]
             fill = "-" if s.fill_rate is None else f"{s.fill_rate:.0%}"
-            text += f"| {_value(s.median_pct, 3):>10} {_value(s.p90_pct, 3):>5} {_value(s.bias_pct, 2):>6} {fill:>5} "
+            text += f"| {_value(s.median_pct, 3):>12} {_value(s.p90_pct, 3):>5} {_value(s.bias_pct, 2):>6} {fill:>5} "
         theory = "/".join(f"{result.depth[r].bins[i].theory_hi_pct or 0:.2f}" for r in roles)
         lines.append(text + f"| {theory}")
     claim = ", ".join(f"{role} {_value(acc.within_3m.median_pct, 3)} % (p90 {_value(acc.within_3m.p90_pct, 3)} %, "

@@ -1,0 +1,113 @@
+"""Time each stage of ``s2r validate`` (quick and default settings) and compare two of them with plain OpenCV.
+
+    .venv/bin/python bench/bench_validate.py [--skip-full]
+
+Prints the wall time of the whole run and the time of each stage per profile (render boards, calibrate,
+render scenes, depth pipeline), then, on the same rendered data, s2r's calibration and depth pipeline beside
+plain OpenCV doing the same work (findChessboardCornersSB + cornerSubPix + calibrateCamera x2 +
+stereoCalibrate; remap x2 + StereoSGBM.compute), as ratios. Timings on a shared machine are disturbed by other
+load: compare the ratios measured side by side in one run, not absolute times across runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from s2r.calib import calibrate_stereo
+from s2r.depth.pipeline import StereoPipeline
+from s2r.profile import StereoProfile
+from s2r.registry import load_profile
+from s2r.render.boards import render_board_set
+from s2r.render.scenes import render_scene
+from s2r.validate.run import FULL, QUICK, Settings, validate
+
+SIM, REAL = "gazebo_dual_camera", "realsense_d435_848x480"
+
+
+def _stage_table(label: str, settings: Settings) -> None:
+    start = time.perf_counter()
+    result = validate(load_profile(SIM), load_profile(REAL), settings=settings)
+    wall = time.perf_counter() - start
+    print(f"\n{label}: {wall:.1f} s wall for {SIM} vs {REAL} (exit {'0' if result.passed else '1'})")
+    for key, secs in result.seconds.items():
+        print(f"  {key:<28} {secs:7.2f} s")
+
+
+def _plain_calibrate(left: list[Path], right: list[Path], size: tuple[int, int]) -> float:
+    obj = np.zeros((54, 3), np.float32)
+    obj[:, :2] = np.mgrid[0:9, 0:6].T.reshape(-1, 2) * 0.025
+    start = time.perf_counter()
+    pts_l, pts_r, objs = [], [], []
+    for lp, rp in zip(left, right, strict=True):
+        found = []
+        for path in (lp, rp):
+            grey = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+            ok, corners = cv2.findChessboardCornersSB(grey, (9, 6))
+            found.append(corners if ok else None)
+        if found[0] is not None and found[1] is not None:
+            pts_l.append(found[0])
+            pts_r.append(found[1])
+            objs.append(obj)
+    flags = cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST
+    _, K1, D1, _, _ = cv2.calibrateCamera(objs, pts_l, size, None, None, flags=flags)
+    _, K2, D2, _, _ = cv2.calibrateCamera(objs, pts_r, size, None, None, flags=flags)
+    cv2.stereoCalibrate(objs, pts_l, pts_r, K1, D1, K2, D2, size, flags=cv2.CALIB_FIX_INTRINSIC)
+    return time.perf_counter() - start
+
+
+def _calibration_ratio(profile: StereoProfile) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        boards = render_board_set(profile, Path(tmp) / "b", views=20, supersample=2, jobs=1)
+        start = time.perf_counter()
+        calibrate_stereo(boards.left_paths, boards.right_paths, jobs=1)
+        ours = time.perf_counter() - start
+        plain = _plain_calibrate(boards.left_paths, boards.right_paths, profile.image_size)
+    print(f"  calibrate 20 views {profile.name:<24} s2r {ours:6.2f} s  plain OpenCV {plain:6.2f} s  "
+          f"ratio {ours / plain:5.2f}")
+
+
+def _depth_ratio(profile: StereoProfile) -> None:
+    frames = render_scene(profile, distances_m=(1.0, 2.0, 3.0), supersample=1, jobs=1)
+    pipe = StereoPipeline(profile, preset="seed-sgbm", postprocess=())
+    cfg, maps = pipe.config, pipe.maps
+    sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=cfg.num_disparities, blockSize=5, P1=600, P2=2400,
+                                 disp12MaxDiff=1, uniquenessRatio=10, speckleWindowSize=100, speckleRange=32)
+    reps = 5
+    start = time.perf_counter()
+    for _ in range(reps):
+        for f in frames:
+            pipe.compute(f.left, f.right)
+    ours = (time.perf_counter() - start) / (reps * len(frames))
+    start = time.perf_counter()
+    for _ in range(reps):
+        for f in frames:
+            rl = cv2.remap(f.left, maps.left_map1, maps.left_map2, cv2.INTER_LINEAR)
+            rr = cv2.remap(f.right, maps.right_map1, maps.right_map2, cv2.INTER_LINEAR)
+            sgbm.compute(rl, rr)
+    plain = (time.perf_counter() - start) / (reps * len(frames))
+    print(f"  depth per frame   {profile.name:<24} s2r {1000 * ours:6.1f} ms plain OpenCV {1000 * plain:6.1f} ms "
+          f"ratio {ours / plain:5.2f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--skip-full", action="store_true", help="time only --quick settings")
+    args = parser.parse_args()
+    _stage_table("--quick", QUICK)
+    if not args.skip_full:
+        _stage_table("default", FULL)
+    print("\ns2r beside plain OpenCV on the same rendered data (one process):")
+    for name in (SIM, REAL):
+        profile = load_profile(name)
+        _calibration_ratio(profile)
+        _depth_ratio(profile)
+
+
+if __name__ == "__main__":
+    main()
