@@ -96,7 +96,7 @@ def summary_lines(result: ValidationResult) -> list[str]:
     if result.recovery:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
     if result.depth:
-        lines += ["Depth accuracy (rendered planes, |relative error|):", *_depth_lines(result)]
+        lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
     if result.edits:
         lines.append("To make the sim match the real camera:")
         for e in result.edits:
