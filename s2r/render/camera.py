@@ -100,12 +100,12 @@ class PinholeView:
     far: float
 
 
-def render_pinhole(view: PinholeView) -> tuple[NDArray[np.uint8], NDArray[np.float64]]:
+def render_pinhole(view: PinholeView) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render the current PyBullet world through ``view``.
 
     Returns:
-        ``(rgb, z)``: ``(H, W, 3)`` uint8 RGB with flat (ambient-only) shading, and ``(H, W)`` float64 z in
-        metres along the optical axis, NaN where nothing was hit.
+        ``(rgb, depth_buffer)``: ``(H, W, 3)`` uint8 RGB with flat (ambient-only) shading, and the ``(H, W)``
+        float32 OpenGL depth buffer in [0, 1] (:func:`depth_buffer_to_z` turns it into metres).
     """
     P = projection_matrix(view.K, view.width, view.height, view.near, view.far)
     V = view_matrix(view.T_cam_world)
@@ -115,8 +115,7 @@ def render_pinhole(view: PinholeView) -> tuple[NDArray[np.uint8], NDArray[np.flo
         lightAmbientCoeff=1.0, lightDiffuseCoeff=0.0, lightSpecularCoeff=0.0, physicsClientId=client(),
     )
     rgb = np.asarray(rgba, dtype=np.uint8).reshape(view.height, view.width, 4)[..., :3]
-    z = depth_buffer_to_z(np.asarray(depth).reshape(view.height, view.width), view.near, view.far)
-    return np.ascontiguousarray(rgb), z
+    return np.ascontiguousarray(rgb), np.asarray(depth, dtype=np.float32).reshape(view.height, view.width)
 
 
 def pose_to_pybullet(T_world_obj: FloatArray) -> tuple[list[float], list[float]]:

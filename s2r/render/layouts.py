@@ -29,6 +29,7 @@ Layout = tuple[tuple[Surface, ...], dict[str, Any]]
 SCENES = ("planes", "slanted", "room")
 _TEXTURE_PX = 1024
 _MAX_SIDE_FACTOR = 20.0
+_MAX_INCIDENCE_DEG = 72.0
 
 
 def _field_rays(profile: StereoProfile) -> FloatArray:
@@ -91,10 +92,20 @@ def _plane_frame(profile: StereoProfile, tmp: Path, k: int, d: float, R: FloatAr
     return (surface,), desc
 
 
-def _slant(k: int) -> FloatArray:
+def _slant(profile: StereoProfile, k: int) -> FloatArray:
+    """Rotation of slanted plane k: yaw/pitch from a fixed list, scaled down until every ray of the view
+    meets the plane at most ``_MAX_INCIDENCE_DEG`` from its normal (wide lenses get gentler slants)."""
     yaw = (30.0, -40.0, 20.0, -25.0, 45.0)[k % 5]
     pitch = (15.0, -10.0, 25.0, 0.0, -20.0)[k % 5]
-    return np.asarray(Rotation.from_euler("yx", [yaw, pitch], degrees=True).as_matrix(), dtype=np.float64)
+    rays = _field_rays(profile)
+    rays = rays / np.linalg.norm(rays, axis=1, keepdims=True)
+    limit = math.cos(math.radians(_MAX_INCIDENCE_DEG))
+    for _ in range(40):
+        R = np.asarray(Rotation.from_euler("yx", [yaw, pitch], degrees=True).as_matrix(), dtype=np.float64)
+        if float(np.min(rays @ R[:, 2])) >= limit:
+            break
+        yaw, pitch = 0.9 * yaw, 0.9 * pitch
+    return R
 
 
 def _room(profile: StereoProfile, tmp: Path, distances: Sequence[float], seed: int) -> Layout:
@@ -124,7 +135,7 @@ def scene_layouts(profile: StereoProfile, tmp: Path, *, scene: str, distances_m:
     if scene == "planes":
         return [_plane_frame(profile, tmp, k, d, np.eye(3), seed, scene) for k, d in enumerate(distances_m)]
     if scene == "slanted":
-        return [_plane_frame(profile, tmp, k, d, _slant(k), seed, scene) for k, d in enumerate(distances_m)]
+        return [_plane_frame(profile, tmp, k, d, _slant(profile, k), seed, scene) for k, d in enumerate(distances_m)]
     if scene == "room":
         return [_room(profile, tmp, distances_m, seed)]
     raise RenderError(f"unknown scene {scene!r}", field="scene", hint=f"choose one of {', '.join(SCENES)}")

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -22,7 +23,7 @@ from numpy.typing import NDArray
 
 from s2r.errors import RenderError
 from s2r.profile import Camera
-from s2r.render.camera import PinholeView, render_pinhole
+from s2r.render.camera import PinholeView, depth_buffer_to_z, render_pinhole
 from s2r.render.distortion import is_pinhole, normalised_rays, undistort_pixels
 
 __all__ = ["CameraSetup", "Capture", "capture", "prepared"]
@@ -121,21 +122,30 @@ def prepared(setup: CameraSetup) -> Prepared:
     return _PREPARED[key]
 
 
-@dataclass(frozen=True)
 class Capture:
-    """One rendered camera: the output image and the wide render's inverse depth.
+    """One rendered camera: the output image, and (computed on first use) the wide render's depth.
 
     Attributes:
         rgb: (H, W, 3) uint8 RGB image in the profile camera's geometry (distortion included).
-        inv_z: (Hw, Hw) float32 inverse depth 1/z (1/m) of the wide render, 0 where nothing was hit.
-        edge: (Hw, Ww) uint8, 1 where the wide render's depth is not locally planar (edges, background).
+        depth_buffer: (Hw, Ww) float32 OpenGL depth buffer of the wide render.
         prep: the setup's precomputation (wide K and maps).
     """
 
-    rgb: NDArray[np.uint8]
-    inv_z: NDArray[np.float32]
-    edge: NDArray[np.uint8]
-    prep: Prepared
+    def __init__(self, rgb: NDArray[np.uint8], depth_buffer: NDArray[np.float32], prep: Prepared) -> None:
+        self.rgb = rgb
+        self.depth_buffer = depth_buffer
+        self.prep = prep
+
+    @cached_property
+    def inv_z(self) -> NDArray[np.float32]:
+        """(Hw, Ww) float32 inverse depth 1/z (1/m) of the wide render, 0 where nothing was hit."""
+        z = depth_buffer_to_z(self.depth_buffer, self.prep.wide.near, self.prep.wide.far)
+        return np.where(np.isfinite(z), 1.0 / z, 0.0).astype(np.float32)
+
+    @cached_property
+    def edge(self) -> NDArray[np.uint8]:
+        """(Hw, Ww) uint8, 1 where the wide render's depth is not locally planar (edges, background)."""
+        return _edges(self.inv_z)
 
     def sample_inverse_depth(self, map_xy: Map) -> NDArray[np.float32]:
         """Inverse depth (1/m) at wide-render pixel coordinates ``map_xy``; NaN near edges or background."""
@@ -163,7 +173,7 @@ def _edges(inv_z: NDArray[np.float32]) -> NDArray[np.uint8]:
 def capture(setup: CameraSetup) -> Capture:
     """Render the current world through ``setup`` (supersampled, distorted); see the module docstring."""
     prep = prepared(setup)
-    rgb_w, z_w = render_pinhole(prep.wide)
+    rgb_w, depth_w = render_pinhole(prep.wide)
     img = rgb_w
     if prep.map_hi is not None:
         img = np.asarray(cv2.remap(rgb_w, prep.map_hi[0], prep.map_hi[1], cv2.INTER_LINEAR,
@@ -172,5 +182,4 @@ def capture(setup: CameraSetup) -> Capture:
     if setup.supersample > 1:
         img = np.asarray(cv2.resize(img, (cam.width_px, cam.height_px), interpolation=cv2.INTER_AREA),
                          dtype=np.uint8)
-    inv = np.where(np.isfinite(z_w), 1.0 / z_w, 0.0).astype(np.float32)
-    return Capture(np.asarray(img, dtype=np.uint8), inv, _edges(inv), prep)
+    return Capture(np.asarray(img, dtype=np.uint8), depth_w, prep)

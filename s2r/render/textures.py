@@ -37,18 +37,20 @@ def checkerboard_texture(
 def speckle_texture(size_px: int, *, seed: int, finest_px: float = 1.0) -> NDArray[np.uint8]:
     """A seeded, non-repeating multi-scale speckle texture (size_px x size_px, RGB uint8).
 
-    Octaves of Gaussian-filtered white noise from ``finest_px`` texels up to 1/8 of the texture, summed with
-    equal contrast per octave, so it stays matchable whether a texel covers a tenth of a pixel or ten.
+    Octaves of white noise generated at ``size_px / scale`` and upsampled (bicubic) for scales from
+    ``finest_px`` texels up to 1/8 of the texture, coarser octaves slightly weaker, so it stays matchable
+    whether a texel covers a tenth of a pixel or ten.
     """
     rng = np.random.default_rng(seed)
     total = np.zeros((size_px, size_px), np.float32)
-    scale = finest_px
+    scale, weight = finest_px, 1.0
     while scale <= size_px / 8:
-        noise = rng.standard_normal((size_px, size_px)).astype(np.float32)
-        if scale > 1.0:
-            noise = np.asarray(cv2.GaussianBlur(noise, (0, 0), sigmaX=scale / 2.0), dtype=np.float32)
-        total += noise / (float(noise.std()) + 1e-9)
-        scale *= 2.0
+        n = max(4, round(size_px / scale))
+        noise = rng.standard_normal((n, n)).astype(np.float32)
+        layer = noise if n == size_px else np.asarray(
+            cv2.resize(noise, (size_px, size_px), interpolation=cv2.INTER_CUBIC), dtype=np.float32)
+        total += np.float32(weight / (float(layer.std()) + 1e-9)) * layer
+        scale, weight = scale * 2.0, weight * 0.8
     total = (total - total.mean()) / (total.std() + 1e-9)
     grey = np.clip(128.0 + 45.0 * total, 10, 245)
     tint = rng.uniform(0.85, 1.15, size=3).astype(np.float32)

@@ -66,7 +66,8 @@ def test_pixel_offset_makes_renders_obey_opencv_k(tmp_path: Path) -> None:
     """TinyRenderer samples pixel centres only with (ox, oy) = (0, +1): a quad spanning u 200.3-300.3 and
     v 150.3-250.3 covers exactly columns 201..300 and rows 151..250 (a wrong offset shifts them by one)."""
     set_world([_dark_quad(tmp_path, 200.3, 150.3, 300.3, 250.3, 1.5)])
-    rgb, z = render_pinhole(PinholeView(K, 640, 480, np.eye(4), 0.05, 50.0))
+    rgb, buffer = render_pinhole(PinholeView(K, 640, 480, np.eye(4), 0.05, 50.0))
+    z = depth_buffer_to_z(buffer, 0.05, 50.0)
     dark = rgb[..., 0] < 128
     cols = np.nonzero(dark.any(axis=0))[0]
     rows = np.nonzero(dark.any(axis=1))[0]
