@@ -1,1 +1,51 @@
-"""Sim-versus-real validation: diffs, depth accuracy, verdicts and reports."""
+"""Sim-versus-real validation: parameter and projection diffs, depth resolution, recovered calibration, depth
+accuracy on rendered ground truth, the edits that make the sim match, a verdict and reports.
+
+    >>> from s2r.validate import validate, QUICK
+    >>> result = validate(load_profile("gazebo_dual_camera"), load_profile("realsense_d435_848x480"), settings=QUICK)
+    >>> result.passed, [c.text for c in result.failures]
+"""
+
+from s2r.validate.advice import Edit, gazebo_hfov_rad, right_joint_origin, suggest_edits
+from s2r.validate.depth_accuracy import DEFAULT_BINS_M, BinStats, DepthAccuracy, measure_depth_accuracy
+from s2r.validate.params import ParamRow, parameter_table
+from s2r.validate.projection import ProjectionDiff, projection_difference
+from s2r.validate.recovery import RecoveryResult, RecoveryRow, compare_recovered, recover_calibration
+from s2r.validate.report import write_validation_report
+from s2r.validate.resolution import DepthResolution, depth_resolution
+from s2r.validate.run import FULL, QUICK, Settings, ValidationResult, check_distances, validate
+from s2r.validate.summary import summary_lines
+from s2r.validate.tolerances import Tolerances, load_tolerances
+from s2r.validate.verdict import Check
+
+__all__ = [
+    "DEFAULT_BINS_M",
+    "FULL",
+    "QUICK",
+    "BinStats",
+    "Check",
+    "DepthAccuracy",
+    "DepthResolution",
+    "Edit",
+    "ParamRow",
+    "ProjectionDiff",
+    "RecoveryResult",
+    "RecoveryRow",
+    "Settings",
+    "Tolerances",
+    "ValidationResult",
+    "check_distances",
+    "compare_recovered",
+    "depth_resolution",
+    "gazebo_hfov_rad",
+    "load_tolerances",
+    "measure_depth_accuracy",
+    "parameter_table",
+    "projection_difference",
+    "recover_calibration",
+    "right_joint_origin",
+    "suggest_edits",
+    "summary_lines",
+    "validate",
+    "write_validation_report",
+]

@@ -146,6 +146,26 @@ def _sample_index(frames: Sequence[Any]) -> int:
     return min(range(len(frames)), key=lambda i: abs(float(np.nanmedian(frames[i].depth_rect_m)) - 1.5))
 
 
+def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[float]]], *, supersample: int,
+                seed: int, jobs: int | None) -> tuple[list[Any], list[tuple[str, Sequence[float]]]]:
+    """Frames of every scene; scenes after the first are optional (skipped with a warning if unrenderable)."""
+    from s2r.render.scenes import render_scene
+
+    frames: list[Any] = []
+    rendered: list[tuple[str, Sequence[float]]] = []
+    for k, (scene, distances) in enumerate(scenes):
+        try:
+            frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
+                                   seed=seed, jobs=jobs)
+        except RenderError as exc:
+            if k == 0:
+                raise
+            log.warning("%s: %s scene skipped: %s", profile.name, scene, exc)
+            continue
+        rendered.append((scene, distances))
+    return frames, rendered
+
+
 def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
                            scenes: Sequence[tuple[str, Sequence[float]]] = (("planes", (0.5, 1.0, 2.0, 3.0, 5.0)),),
                            bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M, supersample: int = 2,
@@ -155,21 +175,9 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
     Every frame's pixels are pooled and binned by true depth (metres, rectified left frame).
     """
     from s2r.depth.pipeline import StereoPipeline
-    from s2r.render.scenes import render_scene
 
     start = time.perf_counter()
-    frames: list[Any] = []
-    rendered_scenes: list[tuple[str, Sequence[float]]] = []
-    for k, (scene, distances) in enumerate(scenes):
-        try:
-            frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
-                                   seed=seed, jobs=jobs)
-        except RenderError as exc:
-            if k == 0:
-                raise
-            log.warning("%s: %s scene skipped: %s", profile.name, scene, exc)  # extra scenes are optional
-            continue
-        rendered_scenes.append((scene, distances))
+    frames, rendered_scenes = _render_all(profile, scenes, supersample=supersample, seed=seed, jobs=jobs)
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None

@@ -11,7 +11,7 @@ import logging
 import os
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -167,17 +167,11 @@ def _run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Toleran
     with ProcessPoolExecutor(max_workers=min(jobs, len(tasks))) as pool:
         futures: dict[Future[Any], tuple[str, str]] = {
             pool.submit(_task, kind, roles[role], settings, tol): (kind, role) for kind, role in tasks}
-        for i, fut in enumerate(_as_completed(futures)):
+        for i, fut in enumerate(as_completed(futures)):
             key = futures[fut]
             results[key] = fut.result()
             report(progress, i + 1, len(tasks), f"{key[0]} {key[1]}")
     return results
-
-
-def _as_completed(futures: dict[Future[Any], Any]) -> Any:
-    from concurrent.futures import as_completed
-
-    return as_completed(futures)
 
 
 def _gazebo_xml(real: StereoProfile) -> str | None:
