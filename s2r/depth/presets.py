@@ -120,14 +120,16 @@ def resolve_preset(
     :class:`DepthError` when it does not fit the image width.
     """
     z_min = profile.matcher.min_depth_m
-    derived = max(16, math.ceil(fx_px * baseline_m / z_min / 16.0) * 16)
+    needed = max(16, math.ceil(fx_px * baseline_m / z_min / 16.0) * 16)
+    width = profile.image_size[0]
+    # A derived range never exceeds the image: clamp it (the warning below then says what is lost).
+    derived = min(needed, max(16, (width - 1) // 16 * 16))
     config = _base_config(preset, profile, derived)
     if num_disparities is not None:
         if num_disparities <= 0 or num_disparities % 16:
             raise DepthError(f"num_disparities must be a positive multiple of 16, got {num_disparities}",
                              field="num_disparities", hint="use 16, 32, 48, ...")
         config = replace(config, num_disparities=num_disparities)
-    width = profile.image_size[0]
     if config.min_disparity + config.num_disparities >= width:
         raise DepthError(
             f"disparity range {config.min_disparity}+{config.num_disparities} px does not fit the {width} px image",
@@ -135,8 +137,8 @@ def resolve_preset(
     nearest = fx_px * baseline_m / max(config.min_disparity + config.num_disparities - 1, 1)
     if nearest > z_min * 1.0001:
         log.warning("preset %s sees no nearer than %.3f m with %d disparities; the profile %s works from %.3f m "
-                    "(pass num_disparities=%d)", preset, nearest, config.num_disparities, profile.name, z_min,
-                    derived)
+                    "(it needs num_disparities=%d)", preset, nearest, config.num_disparities, profile.name, z_min,
+                    needed)
     return config
 
 

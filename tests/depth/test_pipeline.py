@@ -191,3 +191,22 @@ def test_fisheye_profile_uses_fisheye_maps(pair: SynthPair) -> None:
     np.testing.assert_array_equal(pipe.maps.left_map1, expected)
     result = pipe.compute(pair.left, pair.right)
     assert result.valid.mean() > 0.5
+
+
+def test_derived_range_is_clamped_to_the_image(caplog: pytest.LogCaptureFixture, small_rig: StereoProfile) -> None:
+    close_up = small_rig.model_copy(update={"matcher": small_rig.matcher.model_copy(update={"min_depth_m": 0.05})})
+    with caplog.at_level(logging.WARNING, logger="s2r"):
+        pipe = StereoPipeline(close_up, preset="fast")  # fx' B / z = 554 px > 320 px image
+    assert pipe.config.num_disparities == 304
+    assert "it needs num_disparities=560" in caplog.text
+
+
+@pytest.mark.parametrize("name", ["gazebo_dual_camera", "xbot_u_stereo", "realsense_d435_848x480"])
+def test_shipped_profiles_build_every_preset(name: str) -> None:
+    from s2r.registry import list_profiles
+
+    if name not in list_profiles():
+        pytest.skip(f"profile {name} not shipped yet")
+    for preset in PRESETS:
+        pipe = StereoPipeline(name, preset=preset)
+        assert pipe.profile.name == name and pipe.maps.left_map1.shape[:2] == pipe.profile.image_size[::-1]
