@@ -1,11 +1,145 @@
-"""CLI commands of this area (filled in by its issue)."""
+"""``s2r calibrate``: chessboard images (folders, globs, ROS bags) to a real profile with quality figures."""
 
 from __future__ import annotations
 
+import argparse
+import re
+from pathlib import Path
 from typing import Any
 
-__all__ = ["register"]
+from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.errors import CalibrationError
+from s2r.fileio import check_output_free, prepare_output_dir
+from s2r.formats.s2r_yaml import dump_profile
+
+__all__ = ["parse_pattern", "register"]
+
+EXIT_OK = 0
+
+
+def parse_pattern(text: str) -> tuple[int, int]:
+    """``"9x6"`` -> ``(9, 6)`` inner corners (columns x rows)."""
+    match = re.fullmatch(r"\s*(\d+)\s*[xX*,]\s*(\d+)\s*", text)
+    if not match or min(int(match.group(1)), int(match.group(2))) < 2:
+        raise CalibrationError(f"cannot read pattern {text!r}", field="--pattern",
+                               hint="give INNER corners as COLSxROWS, e.g. 9x6 for a board of 10x7 squares")
+    return int(match.group(1)), int(match.group(2))
 
 
 def register(sub: Any) -> None:
-    """Add this area's subcommands."""
+    """Add ``s2r calibrate``."""
+    p: argparse.ArgumentParser = sub.add_parser(
+        "calibrate", help="calibrate a stereo rig (or one camera) from chessboard images or a ROS bag",
+        description="Chessboard calibration into a real s2r profile, with per-view errors, outliers, "
+                    "standard deviations, coverage and an optional HTML report.")
+    p.add_argument("input", nargs="?", type=Path,
+                   help="folder with left/ and right/ subfolders, or with leftNN/rightNN image files")
+    p.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6)")
+    p.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
+    p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
+    p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
+    p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
+    p.add_argument("--distortion", choices=("k1k2", "plumb_bob", "rational"), default="k1k2",
+                   help="distortion terms to solve (default k1k2: k3 and tangential fixed at 0)")
+    p.add_argument("--max-error", type=float, default=None, metavar="PX",
+                   help="drop views whose RMS exceeds PX (default: a robust median/MAD threshold)")
+    p.add_argument("--refine-joint", action="store_true", help="refine intrinsics and extrinsics jointly")
+    p.add_argument("--mono", action="store_true", help="calibrate one camera into a camera-only profile")
+    p.add_argument("--left", default=None, metavar="GLOB", help="left (or mono) images by glob")
+    p.add_argument("--right", default=None, metavar="GLOB", help="right images by glob")
+    p.add_argument("--bag", type=Path, default=None, help="ROS 1 bag or ROS 2 bag folder/file")
+    p.add_argument("--left-topic", default=None, help="left image topic in the bag")
+    p.add_argument("--right-topic", default=None, help="right image topic in the bag")
+    p.add_argument("--max-dt", type=float, default=0.01, help="pairing tolerance of bag stamps in s (0.01)")
+    p.add_argument("--every", type=int, default=1, help="use every N-th bag pair (default 1)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the corner cache")
+    add_json(p)
+    add_force(p)
+    p.set_defaults(func=run)
+
+
+def _check_args(args: argparse.Namespace) -> tuple[int, int]:
+    pattern = parse_pattern(args.pattern)
+    if not args.square > 0:
+        raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
+                               hint="give the square edge in metres, e.g. 0.025")
+    if args.jobs is not None and args.jobs < 1:
+        raise CalibrationError(f"--jobs must be at least 1, got {args.jobs}", field="--jobs")
+    if args.every < 1:
+        raise CalibrationError(f"--every must be at least 1, got {args.every}", field="--every")
+    if args.max_error is not None and args.max_error <= 0:
+        raise CalibrationError("--max-error must be positive", field="--max-error", hint="e.g. --max-error 1.0")
+    if args.bag is not None and (args.left_topic is None or args.right_topic is None) and not args.mono:
+        raise CalibrationError("--bag needs --left-topic and --right-topic", field="--left-topic",
+                               hint="list the bag's topics with `rosbags-info BAG`")
+    return pattern
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``s2r calibrate``; returns the exit code."""
+    pattern = _check_args(args)
+    out = check_output_free(args.output, force=args.force)
+    if args.report is not None:
+        prepare_output_dir(args.report, force=args.force)
+    name = args.name or re.sub(r"[^A-Za-z0-9_.\-]", "_", out.stem) or "calibrated"
+    common: dict[str, Any] = {
+        "pattern": pattern, "square_m": args.square, "name": name, "distortion": args.distortion,
+        "max_error_px": args.max_error, "jobs": args.jobs, "progress": ProgressBar(),
+        "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
+    }
+    result: Any
+    if args.mono:
+        from s2r.calib.inputs import find_mono_images
+        from s2r.calib.mono import calibrate_mono
+
+        if args.bag is not None:
+            raise CalibrationError("--mono from a bag is not supported", field="--bag",
+                                   hint="export the images to a folder first")
+        result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
+    elif args.bag is not None:
+        from s2r.calib.bags import calibrate_stereo_bag
+
+        result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
+                                      max_dt_s=args.max_dt, every=args.every, refine_joint=args.refine_joint,
+                                      **common)
+    else:
+        from s2r.calib.inputs import find_stereo_pairs
+        from s2r.calib.stereo import calibrate_stereo
+
+        pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
+        result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                                  refine_joint=args.refine_joint, **common)
+    dump_profile(result.profile, out, force=args.force)
+    if args.report is not None:
+        from s2r.calib.report import write_calibration_report
+
+        write_calibration_report(result, args.report / "index.html", force=True)
+    if args.json:
+        print_json({**result.figures(), "output": str(out),
+                    "report": None if args.report is None else str(args.report / "index.html")})
+    else:
+        _print_summary(result, out)
+    return EXIT_OK
+
+
+def _print_summary(result: Any, out: Path) -> None:
+    figures = result.figures()
+    q = figures["quality"] or {}
+    print(f"wrote {out}: {q.get('views_used')} views used, {len(figures['dropped'])} skipped or dropped")
+    cams = [("camera", figures["camera"])] if "camera" in figures else [("left", figures["left"]),
+                                                                         ("right", figures["right"])]
+    for label, cam in cams:
+        std = cam["std"] or {}
+        print(f"  {label:<6} fx {cam['fx_px']:.2f}±{std.get('fx_px', 0):.2f}  fy {cam['fy_px']:.2f}±"
+              f"{std.get('fy_px', 0):.2f}  cx {cam['cx_px']:.2f}±{std.get('cx_px', 0):.2f}  cy "
+              f"{cam['cy_px']:.2f}±{std.get('cy_px', 0):.2f} px")
+    if "baseline_m" in figures:
+        print(f"  baseline {figures['baseline_m'] * 1000:.2f}±{(figures['baseline_std_m'] or 0) * 1000:.2f} mm, "
+              f"RMS left {q.get('rms_left_px', 0):.3f} right {q.get('rms_right_px', 0):.3f} stereo "
+              f"{q.get('rms_stereo_px', 0):.3f} px, epipolar {q.get('epipolar_rms_px', 0):.3f} px")
+    else:
+        print(f"  RMS {q.get('rms_left_px', 0):.3f} px")
+    for d in figures["dropped"]:
+        rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
+        print(f"  skipped {d['name']}{rms}: {d['reason']}")

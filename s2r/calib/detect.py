@@ -1,0 +1,226 @@
+"""Chessboard corner detection: downscaled detection, full-resolution refinement, parallel and cached.
+
+Detection follows ROS camera_calibration: images larger than 640x480 are detected on an INTER_AREA
+downscaled copy and the corners refined at full resolution. The classic detector
+(``findChessboardCorners`` with ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK) runs first, the
+sector-based ``findChessboardCornersSB`` is the fallback. ``cornerSubPix`` uses a window fitted to
+the board: 0.4 x the smallest distance between neighbouring corners, clamped to 2..11 px (half-size),
+instead of a fixed 11x11 (half-size) window that would swallow neighbouring corners of small or distant boards.
+
+Corner arrays are (N, 2) float32 pixel coordinates (OpenCV convention, 0-based pixel centres), row-major
+over the pattern's ``(cols, rows)`` inner corners.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import multiprocessing as mp
+from collections import deque
+from collections.abc import Iterable, Iterator
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.errors import S2RError
+from s2r.fileio import atomic_write_text
+from s2r.progress import ProgressCallback, report
+
+__all__ = [
+    "DETECTOR_VERSION",
+    "CornerCache",
+    "DetectItem",
+    "Detection",
+    "detect_board",
+    "detect_stream",
+    "refine_window",
+]
+
+#: Bumped whenever detection changes so stale cache entries are ignored.
+DETECTOR_VERSION = 2
+#: Images with more pixels than this are detected on a downscaled copy (as ROS does).
+DETECT_AREA_PX = 640 * 480
+_CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+_SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
+
+Status = Literal["ok", "no_board", "unreadable"]
+Corners = NDArray[np.float32]
+
+
+@dataclass(frozen=True)
+class Detection:
+    """Detection result of one image.
+
+    ``size`` is ``(width, height)`` in pixels (None when unreadable); ``corners`` (N, 2) float32 pixels
+    when ``status == "ok"``; ``detector`` is ``"classic"`` or ``"sb"``; ``detail`` says why it failed.
+    """
+
+    name: str
+    sha256: str
+    status: Status
+    size: tuple[int, int] | None = None
+    corners: Corners | None = None
+    detector: str = ""
+    detail: str = ""
+    cached: bool = False
+
+
+@dataclass(frozen=True)
+class DetectItem:
+    """One image to detect: a display ``name``, its content ``sha256`` and either a file path or a
+    decoded 8-bit grey image (H, W) (bag frames)."""
+
+    name: str
+    sha256: str
+    source: Path | NDArray[np.uint8]
+
+
+def refine_window(corners: Corners, pattern: tuple[int, int]) -> int:
+    """cornerSubPix half-window (pixels): 0.4 x the smallest neighbour distance in the grid, clamped 2..11.
+
+    The window (``2 * half + 1`` px) then spans 80 % of the smallest corner spacing: it never reaches the
+    neighbouring corners nor, for the outer corners, far past the outer squares into the background
+    (half the spacing let the board's edge pull corners of OpenCV's left02.jpg by 1-3 px)."""
+    cols, rows = pattern
+    grid = corners.reshape(rows, cols, 2).astype(np.float64)
+    dists = [np.linalg.norm(np.diff(grid, axis=1), axis=2), np.linalg.norm(np.diff(grid, axis=0), axis=2)]
+    min_dist = min(float(d.min()) for d in dists if d.size)
+    return int(min(11, max(2, math.floor(0.4 * min_dist))))
+
+
+def _find_on(image: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
+    ok, corners = cv2.findChessboardCorners(image, pattern, flags=_CLASSIC_FLAGS)
+    if ok:
+        return np.asarray(corners, np.float32).reshape(-1, 2), "classic"
+    ok, corners = cv2.findChessboardCornersSB(image, pattern, flags=cv2.CALIB_CB_NORMALIZE_IMAGE)
+    if ok:
+        return np.asarray(corners, np.float32).reshape(-1, 2), "sb"
+    return None, ""
+
+
+def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
+    """Find and refine the inner corners of a ``(cols, rows)`` chessboard in an 8-bit grey image (H, W).
+
+    Returns ``(corners (N, 2) float32 pixels or None, detector name)``.
+    """
+    h, w = gray.shape[:2]
+    scale = math.sqrt(w * h / DETECT_AREA_PX)
+    if scale > 1.0:
+        small_size = (max(1, round(w / scale)), max(1, round(h / scale)))
+        small = np.asarray(cv2.resize(gray, small_size, interpolation=cv2.INTER_AREA), np.uint8)
+        found, detector = _find_on(small, pattern)
+        if found is None:
+            return None, ""
+        sx, sy = w / small_size[0], h / small_size[1]
+        found = ((found + 0.5) * np.array([sx, sy], np.float32) - 0.5).astype(np.float32)
+    else:
+        found, detector = _find_on(gray, pattern)
+        if found is None:
+            return None, ""
+    win = refine_window(found, pattern)
+    refined = cv2.cornerSubPix(gray, found.reshape(-1, 1, 2).copy(), (win, win), (-1, -1), _SUBPIX_CRITERIA)
+    return np.asarray(refined, np.float32).reshape(-1, 2), detector
+
+
+def _detect_item(item: DetectItem, pattern: tuple[int, int]) -> Detection:
+    """Worker: read (if a path), detect, and describe the outcome."""
+    if isinstance(item.source, Path):
+        gray = cv2.imread(str(item.source), cv2.IMREAD_GRAYSCALE)
+        if gray is None:
+            return Detection(item.name, item.sha256, "unreadable", detail="not a readable image (corrupt or empty)")
+    else:
+        gray = item.source
+    size = (int(gray.shape[1]), int(gray.shape[0]))
+    corners, detector = detect_board(np.ascontiguousarray(gray, np.uint8), pattern)
+    if corners is None:
+        return Detection(item.name, item.sha256, "no_board", size=size,
+                         detail=f"no {pattern[0]}x{pattern[1]} chessboard found")
+    return Detection(item.name, item.sha256, "ok", size=size, corners=corners, detector=detector)
+
+
+class CornerCache:
+    """Per-image detection results on disk, one small JSON file per (content sha256, pattern, version).
+
+    Each result is written atomically as soon as it is known, so an interrupted run keeps every finished
+    detection and a re-run (e.g. with other solver options) reads them back instead of detecting again.
+    """
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = Path(folder)
+
+    def _file(self, sha256: str, pattern: tuple[int, int]) -> Path:
+        return self.folder / f"{sha256}-{pattern[0]}x{pattern[1]}-v{DETECTOR_VERSION}.json"
+
+    def get(self, name: str, sha256: str, pattern: tuple[int, int]) -> Detection | None:
+        """The cached detection of this content, renamed to ``name``, or None."""
+        try:
+            data = json.loads(self._file(sha256, pattern).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None
+        corners = None if data.get("corners") is None else np.asarray(data["corners"], np.float32).reshape(-1, 2)
+        size = None if data.get("size") is None else (int(data["size"][0]), int(data["size"][1]))
+        return Detection(name, sha256, data["status"], size=size, corners=corners,
+                         detector=data.get("detector", ""), detail=data.get("detail", ""), cached=True)
+
+    def put(self, det: Detection, pattern: tuple[int, int]) -> None:
+        """Store ``det`` (atomic write; a failure to write the cache is not an error)."""
+        data: dict[str, Any] = {"status": det.status, "size": det.size, "detector": det.detector,
+                                "detail": det.detail,
+                                "corners": None if det.corners is None else det.corners.round(4).tolist()}
+        with contextlib.suppress(OSError, S2RError):
+            atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True)
+
+
+def _executor(jobs: int) -> ProcessPoolExecutor:
+    # fork: workers start instantly with cv2 loaded and never re-import the caller's __main__ (scripts
+    # without a main guard keep working); spawn where fork does not exist. Never call cv2.setNumThreads in a
+    # forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
+    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+
+
+def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,
+                  cache: CornerCache | None = None, total: int | None = None,
+                  progress: ProgressCallback | None = None) -> Iterator[Detection]:
+    """Detect every item, in input order, over ``jobs`` worker processes.
+
+    Items are consumed lazily and at most ``4 * jobs`` are in flight, so images are never all in memory.
+    Cache hits skip detection; new results are written to the cache as they arrive.
+    """
+    pending: deque[Detection | Future[Detection]] = deque()
+    window = max(1, 4 * jobs)
+    done = 0
+    pool: ProcessPoolExecutor | None = None
+
+    def finish(entry: Detection | Future[Detection]) -> Detection:
+        nonlocal done
+        det = entry if isinstance(entry, Detection) else entry.result()
+        if cache is not None and not det.cached:
+            cache.put(det, pattern)
+        done += 1
+        report(progress, done, total or done, "detecting corners")
+        return det
+
+    try:
+        for item in items:
+            hit = cache.get(item.name, item.sha256, pattern) if cache is not None else None
+            if hit is not None:
+                pending.append(hit)
+            elif jobs <= 1:
+                pending.append(_detect_item(item, pattern))
+            else:
+                pool = pool or _executor(jobs)
+                pending.append(pool.submit(_detect_item, item, pattern))
+            while len(pending) >= window or (pending and isinstance(pending[0], Detection)):
+                yield finish(pending.popleft())
+        while pending:
+            yield finish(pending.popleft())
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)

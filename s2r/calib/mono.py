@@ -1,0 +1,126 @@
+"""Single-camera calibration (``s2r calibrate --mono``) into a :class:`~s2r.profile.MonoProfile`."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.detect import CornerCache, DetectItem, detect_stream
+from s2r.calib.solve import MonoSolution, outlier_threshold, solve_mono
+from s2r.calib.stereo import make_camera
+from s2r.calib.synth import board_object_points
+from s2r.calib.views import MIN_VIEWS, check_sizes, no_board_error, too_few_error
+from s2r.fileio import sha256_file
+from s2r.profile import CalibrationQuality, DroppedView, MonoProfile, Provenance, SourceFile
+from s2r.progress import ProgressCallback
+
+__all__ = ["MonoCalibration", "calibrate_mono"]
+
+log = logging.getLogger(__name__)
+Corners = NDArray[np.float32]
+_METHOD = "s2r calibrate --mono: OpenCV calibrateCameraExtended"
+
+
+@dataclass(frozen=True)
+class MonoCalibration:
+    """A single-camera calibration: the profile, per-view RMS (px) of used views, dropped views, coverage."""
+
+    profile: MonoProfile
+    view_names: tuple[str, ...]
+    view_errors_px: tuple[float, ...]
+    dropped: tuple[DroppedView, ...]
+    threshold_px: float
+    coverage: Coverage
+    spread: PoseSpread
+    warnings: tuple[str, ...]
+    corners: tuple[Corners, ...] = field(repr=False)
+    sample_path: Path | None = None
+
+    def figures(self) -> dict[str, Any]:
+        """The figures as JSON-ready values (what ``--json`` prints)."""
+        cam = self.profile.camera
+        quality = self.profile.provenance.calibration
+        return {
+            "profile": self.profile.name,
+            "camera": {"fx_px": cam.fx_px, "fy_px": cam.fy_px, "cx_px": cam.cx_px, "cy_px": cam.cy_px,
+                       "distortion": list(cam.distortion.coefficients),
+                       "std": None if cam.std is None else cam.std.model_dump(mode="json")},
+            "quality": None if quality is None else quality.model_dump(mode="json"),
+            "threshold_px": self.threshold_px,
+            "views": [{"name": n, "rms_px": e} for n, e in zip(self.view_names, self.view_errors_px, strict=True)],
+            "dropped": [d.model_dump(mode="json") for d in self.dropped],
+            "coverage_grid": self.coverage.counts.tolist(),
+            "warnings": list(self.warnings),
+        }
+
+
+def _solve_with_outliers(names: list[str], corners: list[Corners], obj: Corners, size: tuple[int, int], *,
+                         distortion: str, max_error_px: float | None) -> tuple[list[int], MonoSolution, float,
+                                                                                 list[DroppedView]]:
+    keep = list(range(len(names)))
+    dropped: list[DroppedView] = []
+    thr: float | None = None
+    while True:
+        sol = solve_mono([obj] * len(keep), [corners[i] for i in keep], size, distortion=distortion)
+        if thr is None:
+            thr = outlier_threshold(sol.per_view_px, max_error_px=max_error_px)
+        bad = [j for j, e in enumerate(sol.per_view_px) if e > thr]
+        if not bad or len(keep) - len(bad) < MIN_VIEWS:
+            return keep, sol, thr, dropped
+        dropped += [DroppedView(name=names[keep[j]], rms_px=float(sol.per_view_px[j]),
+                                reason=f"outlier: RMS {sol.per_view_px[j]:.3f} px > {thr:.3f} px") for j in bad]
+        keep = [k for j, k in enumerate(keep) if j not in set(bad)]
+
+
+def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), square_m: float = 0.025,
+                   name: str = "calibrated", distortion: str = "k1k2", max_error_px: float | None = None,
+                   jobs: int | None = None, cache_dir: Path | None = None,
+                   progress: ProgressCallback | None = None) -> MonoCalibration:
+    """Calibrate one camera from chessboard image files; same detection, outlier and coverage rules as
+    :func:`s2r.calib.calibrate_stereo`."""
+    hashes = {Path(p): sha256_file(p) for p in paths}
+    items = (DetectItem(name=f"{Path(p).parent.name}/{Path(p).name}", sha256=hashes[Path(p)], source=Path(p))
+             for p in paths)
+    cache = CornerCache(cache_dir) if cache_dir is not None else None
+    dets = list(detect_stream(items, pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
+                              total=len(paths), progress=progress))
+    size = check_sizes(dets)
+    ok = [(Path(p), d) for p, d in zip(paths, dets, strict=True) if d.status == "ok" and d.corners is not None]
+    skipped = [DroppedView(name=d.name, reason=f"{d.status.replace('_', ' ')}: {d.detail}")
+               for d in dets if d.status != "ok"]
+    if not ok:
+        raise no_board_error(sum(d.status != "unreadable" for d in dets), pattern)
+    if len(ok) < MIN_VIEWS:
+        raise too_few_error(len(ok), skipped, what="images")
+    names = [d.name for _, d in ok]
+    corners = [d.corners for _, d in ok if d.corners is not None]
+    obj = board_object_points(pattern, square_m)
+    keep, sol, thr, outliers = _solve_with_outliers(names, corners, obj, size, distortion=distortion,
+                                                    max_error_px=max_error_px)
+    used = [corners[i] for i in keep]
+    cov = coverage_of(used, size)
+    spread = pose_spread(sol.rvecs, sol.tvecs, used, pattern=pattern, square_m=square_m, size=size)
+    dropped = (*skipped, *outliers)
+    quality = CalibrationQuality(
+        pattern=pattern, square_m=square_m, views_used=len(keep), views_dropped=dropped, rms_left_px=sol.rms_px,
+        coverage_left=cov.fraction, tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m,
+        distortion_terms=distortion)
+    profile = MonoProfile(name=name, camera=make_camera(sol.K, sol.D, size, sol.std, distortion=distortion),
+                          provenance=Provenance(origin="real", method=_METHOD, calibration=quality,
+                                                sources=tuple(SourceFile(path=str(p), sha256=h)
+                                                              for p, h in hashes.items())))
+    warnings = coverage_warnings("the", cov, spread)
+    for w in warnings:
+        log.warning("%s", w)
+    return MonoCalibration(profile=profile, view_names=tuple(names[i] for i in keep),
+                           view_errors_px=tuple(float(e) for e in sol.per_view_px), dropped=dropped,
+                           threshold_px=thr, coverage=cov, spread=spread, warnings=tuple(warnings),
+                           corners=tuple(used), sample_path=ok[keep[0]][0])

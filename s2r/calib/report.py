@@ -1,0 +1,183 @@
+"""``s2r calibrate --report``: a self-contained HTML page of a calibration (figures embedded).
+
+Sections: summary and warnings, the parameter table with standard deviations, the per-view error bar
+chart (dropped views marked), the coverage heat map of each camera, one detection overlay, and a
+rectified pair with horizontal lines to judge the epipolar alignment.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+from typing import Any
+
+import cv2
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.calib.coverage import Coverage
+from s2r.calib.mono import MonoCalibration
+from s2r.calib.stereo import StereoCalibration
+from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, image_to_data_uri, write_report
+from s2r.profile import Camera
+from s2r.rectification import stereo_rectification
+
+__all__ = ["calibration_sections", "write_calibration_report"]
+
+Image = NDArray[np.uint8]
+
+
+def _camera_rows(label: str, cam: Camera) -> list[list[Any]]:
+    std = cam.std
+    rows: list[list[Any]] = []
+    for key, value in (("fx_px", cam.fx_px), ("fy_px", cam.fy_px), ("cx_px", cam.cx_px), ("cy_px", cam.cy_px)):
+        sd = None if std is None else getattr(std, key)
+        rows.append([f"{label} {key}", value, sd, None if sd is None else f"{100 * sd / value:.3f} %"])
+    dstd = (std.distortion if std is not None else None) or ()
+    for i, coef in enumerate(cam.distortion.coefficients):
+        sd = dstd[i] if i < len(dstd) else None
+        rows.append([f"{label} d{i}", coef, sd, ""])
+    return rows
+
+
+def _error_chart(names: list[str], series: dict[str, list[float]], used: list[bool], threshold: float) -> str:
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.35 * len(names) + 2), 3.4))
+    x = np.arange(len(names))
+    width = 0.8 / max(1, len(series))
+    for k, (label, values) in enumerate(series.items()):
+        bars = ax.bar(x + (k - (len(series) - 1) / 2) * width, values, width, label=label)
+        for bar, ok in zip(bars, used, strict=True):
+            if not ok:
+                bar.set_hatch("//")
+                bar.set_edgecolor("red")
+    ax.axhline(threshold, color="red", linestyle="--", linewidth=1, label=f"threshold {threshold:.2f} px")
+    ax.set_xticks(x, [n if ok else f"{n} (dropped)" for n, ok in zip(names, used, strict=True)],
+                  rotation=70, fontsize=7)
+    ax.set_ylabel("RMS reprojection error (px)")
+    ax.legend(fontsize=8)
+    return figure_to_data_uri(fig)
+
+
+def _coverage_map(coverages: dict[str, Coverage]) -> str:
+    fig, axes = plt.subplots(1, len(coverages), figsize=(4.2 * len(coverages), 3.2), squeeze=False)
+    for ax, (label, cov) in zip(axes[0], coverages.items(), strict=True):
+        im = ax.imshow(cov.counts, cmap="viridis", interpolation="nearest")
+        ax.set_title(f"{label}: {100 * cov.fraction:.0f} % of cells covered")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        fig.colorbar(im, ax=ax, label="corners")
+    return figure_to_data_uri(fig)
+
+
+def _overlay(image: Image, corners: NDArray[np.float32], pattern: tuple[int, int]) -> str:
+    colour = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image.copy()
+    cv2.drawChessboardCorners(colour, pattern, corners.reshape(-1, 1, 2), True)
+    return image_to_data_uri(colour)
+
+
+def _rectified_pair(result: StereoCalibration, left: Image, right: Image) -> str:
+    p = result.profile
+    rect = stereo_rectification(p)
+    out = []
+    for img, cam, R, P in ((left, p.left, rect.R1, rect.P1), (right, p.right, rect.R2, rect.P2)):
+        m1, m2 = cv2.initUndistortRectifyMap(cam.K, cam.D, R, P, p.image_size, cv2.CV_32FC1)
+        warped = cv2.remap(img, m1, m2, cv2.INTER_LINEAR)
+        out.append(cv2.cvtColor(warped, cv2.COLOR_GRAY2BGR) if warped.ndim == 2 else warped)
+    pair = np.hstack(out)
+    for y in range(0, pair.shape[0], max(16, pair.shape[0] // 16)):
+        cv2.line(pair, (0, y), (pair.shape[1] - 1, y), (0, 255, 0), 1)
+    return image_to_data_uri(pair)
+
+
+def _sample(result: StereoCalibration | MonoCalibration) -> tuple[Image, Image | None] | None:
+    if isinstance(result, MonoCalibration):
+        img = None if result.sample_path is None else cv2.imread(str(result.sample_path))
+        return None if img is None else (np.asarray(img, np.uint8), None)
+    if result.sample_images is not None:
+        return result.sample_images
+    if result.sample_paths is None:
+        return None
+    left, right = (cv2.imread(str(p)) for p in result.sample_paths)
+    if left is None or right is None:
+        return None
+    return np.asarray(left, np.uint8), np.asarray(right, np.uint8)
+
+
+def _dropped_table(result: StereoCalibration | MonoCalibration) -> str:
+    return html_table(["image or view", "RMS (px)", "reason"],
+                      [[d.name, d.rms_px, d.reason] for d in result.dropped])
+
+
+def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
+    p = result.profile
+    q = p.provenance.calibration
+    assert q is not None
+    rows = _camera_rows("left", p.left) + _camera_rows("right", p.right)
+    rows.append(["baseline_m", p.baseline_m, p.extrinsics.baseline_std_m, ""])
+    rows.append(["rotation_deg", float(np.degrees(p.rotation_angle_rad)), None, ""])
+    summary = ReportSection("Summary", paragraphs=[html.escape(
+        f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS left {q.rms_left_px:.3f} px, "
+        f"right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; epipolar RMS after rectification "
+        f"{result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm.")]
+        + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
+        tables=[html_table(["parameter", "value", "std", "relative std"], rows)])
+    views = list(result.views)
+    chart = _error_chart([v.name for v in views], {"left": [v.left_px for v in views],
+                                                   "right": [v.right_px for v in views],
+                                                   "stereo": [v.stereo_px for v in views]},
+                         [v.used for v in views], result.threshold_px)
+    errors = ReportSection("Per-view errors", images=[("per-view RMS; hatched red = dropped as outlier", chart)],
+                           tables=[_dropped_table(result)])
+    coverage = ReportSection("Coverage", paragraphs=[html.escape(
+        f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
+        f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
+        f"{100 * result.spread.size_fraction[0]:.0f}-{100 * result.spread.size_fraction[1]:.0f} % of the image")],
+        images=[("corners per image cell", _coverage_map({"left": result.coverage_left,
+                                                          "right": result.coverage_right}))])
+    sections = [summary, errors, coverage]
+    sample = _sample(result)
+    if sample is not None and sample[1] is not None:
+        sections.append(ReportSection("Detection and rectification", images=[
+            ("detected corners (first used left image)",
+             _overlay(sample[0], result.corners_left[0], p.provenance.calibration.pattern)),  # type: ignore[union-attr]
+            ("rectified pair with horizontal lines", _rectified_pair(result, sample[0], sample[1]))]))
+    return sections
+
+
+def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
+    cam = result.profile.camera
+    q = result.profile.provenance.calibration
+    assert q is not None
+    summary = ReportSection("Summary", paragraphs=[html.escape(
+        f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
+        + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
+        tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])
+    names = list(result.view_names) + [d.name for d in result.dropped if d.rms_px is not None]
+    errs = list(result.view_errors_px) + [float(d.rms_px) for d in result.dropped if d.rms_px is not None]
+    used = [True] * len(result.view_names) + [False] * (len(names) - len(result.view_names))
+    sections = [summary, ReportSection("Per-view errors", images=[
+        ("per-view RMS", _error_chart(names, {"camera": errs}, used, result.threshold_px))],
+        tables=[_dropped_table(result)]),
+        ReportSection("Coverage", images=[("corners per image cell", _coverage_map({"camera": result.coverage}))])]
+    sample = _sample(result)
+    if sample is not None:
+        sections.append(ReportSection("Detection", images=[
+            ("detected corners", _overlay(sample[0], result.corners[0], q.pattern))]))
+    return sections
+
+
+def calibration_sections(result: StereoCalibration | MonoCalibration) -> list[ReportSection]:
+    """The report's sections for a stereo or mono calibration."""
+    return _mono_sections(result) if isinstance(result, MonoCalibration) else _stereo_sections(result)
+
+
+def write_calibration_report(result: StereoCalibration | MonoCalibration, path: Path, *,
+                             force: bool = False) -> Path:
+    """Write the HTML report to ``path`` (atomic; refuses to overwrite unless ``force``)."""
+    name = result.profile.name
+    return write_report(path, f"s2r calibration: {name}", calibration_sections(result),
+                        subtitle=result.profile.provenance.method, force=force)

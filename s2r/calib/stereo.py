@@ -1,0 +1,337 @@
+"""Stereo calibration from image pairs: detect, check, solve with outlier rejection, build the profile."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
+from s2r.calib.solve import (
+    DISTORTION_CHOICES,
+    MonoSolution,
+    StereoSolution,
+    baseline_covariance,
+    outlier_threshold,
+    solve_mono,
+    solve_stereo,
+)
+from s2r.calib.synth import board_object_points
+from s2r.calib.views import MIN_VIEWS, StereoViews, check_sizes, no_board_error, stereo_views, too_few_error
+from s2r.errors import CalibrationError
+from s2r.fileio import sha256_file
+from s2r.profile import (
+    CalibrationQuality,
+    Camera,
+    CameraUncertainty,
+    Distortion,
+    DroppedView,
+    Extrinsics,
+    Provenance,
+    SourceFile,
+    StereoProfile,
+)
+from s2r.progress import ProgressCallback, report
+from s2r.rectification import stereo_rectification
+
+__all__ = ["StereoCalibration", "ViewError", "calibrate_stereo", "calibrate_stereo_detections", "make_camera"]
+
+log = logging.getLogger(__name__)
+Corners = NDArray[np.float32]
+_MAX_ROUNDS = 5
+_METHOD = "s2r calibrate: OpenCV calibrateCameraExtended per camera, stereoCalibrate with CALIB_FIX_INTRINSIC"
+
+
+@dataclass(frozen=True)
+class ViewError:
+    """Per-view RMS reprojection errors (px) of one pair; ``used`` False for outliers (``reason`` says why)."""
+
+    name: str
+    left_px: float
+    right_px: float
+    stereo_px: float
+    used: bool
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class StereoCalibration:
+    """A stereo calibration: the real profile and every figure behind it.
+
+    ``views`` per-view errors of the used views (and the outliers, ``used`` False); ``dropped`` every
+    skipped image or view with its reason; ``threshold_px`` the outlier threshold of the last round;
+    coverage per camera; ``spread`` of the board poses (left camera); ``epipolar_rms_px`` the RMS of
+    y differences of matching corners after rectification; ``corners_left/right`` the used views' corners;
+    ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report.
+    """
+
+    profile: StereoProfile
+    views: tuple[ViewError, ...]
+    dropped: tuple[DroppedView, ...]
+    threshold_px: float
+    coverage_left: Coverage
+    coverage_right: Coverage
+    spread: PoseSpread
+    epipolar_rms_px: float
+    warnings: tuple[str, ...]
+    used_names: tuple[str, ...]
+    corners_left: tuple[Corners, ...] = field(repr=False)
+    corners_right: tuple[Corners, ...] = field(repr=False)
+    reordered: tuple[str, ...] = ()
+    sample_paths: tuple[Path, Path] | None = None
+    sample_images: tuple[NDArray[np.uint8], NDArray[np.uint8]] | None = field(default=None, repr=False)
+    detection_cached: int = 0
+
+    def figures(self) -> dict[str, Any]:
+        """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
+        p = self.profile
+        quality = p.provenance.calibration
+        return {
+            "profile": p.name,
+            "left": _camera_figures(p.left), "right": _camera_figures(p.right),
+            "translation_m": list(p.extrinsics.translation_m), "baseline_m": p.baseline_m,
+            "baseline_std_m": p.extrinsics.baseline_std_m,
+            "rotation_deg": float(np.degrees(p.rotation_angle_rad)),
+            "quality": None if quality is None else quality.model_dump(mode="json"),
+            "threshold_px": self.threshold_px,
+            "views": [vars(v) for v in self.views],
+            "dropped": [d.model_dump(mode="json") for d in self.dropped],
+            "coverage_grid_left": self.coverage_left.counts.tolist(),
+            "coverage_grid_right": self.coverage_right.counts.tolist(),
+            "reordered_right_corners": list(self.reordered),
+            "warnings": list(self.warnings),
+            "detections_from_cache": self.detection_cached,
+        }
+
+
+def _camera_figures(cam: Camera) -> dict[str, Any]:
+    std = cam.std
+    return {"fx_px": cam.fx_px, "fy_px": cam.fy_px, "cx_px": cam.cx_px, "cy_px": cam.cy_px,
+            "distortion": list(cam.distortion.coefficients),
+            "std": None if std is None else std.model_dump(mode="json")}
+
+
+def make_camera(K: NDArray[np.float64], D: NDArray[np.float64], size: tuple[int, int], std: NDArray[np.float64],
+                *, distortion: str) -> Camera:
+    """A profile Camera from OpenCV K, D and the std vector ``(fx, fy, cx, cy, d...)``."""
+    ncoef = DISTORTION_CHOICES[distortion][1]
+    model = "rational_polynomial" if distortion == "rational" else "plumb_bob"
+    coefs = tuple(float(v) for v in np.asarray(D, np.float64).reshape(-1)[:ncoef])
+    return Camera(
+        width_px=size[0], height_px=size[1], fx_px=float(K[0, 0]), fy_px=float(K[1, 1]),
+        cx_px=float(K[0, 2]), cy_px=float(K[1, 2]), distortion=Distortion(model=model, coefficients=coefs),
+        std=CameraUncertainty(fx_px=float(std[0]), fy_px=float(std[1]), cx_px=float(std[2]), cy_px=float(std[3]),
+                              distortion=tuple(float(v) for v in std[4:4 + ncoef])))
+
+
+@dataclass
+class _Solved:
+    keep: list[int]
+    mono_l: MonoSolution
+    mono_r: MonoSolution
+    stereo: StereoSolution
+    threshold: float
+    outliers: list[ViewError]
+
+
+def _solve_rounds(views: StereoViews, obj: Corners, size: tuple[int, int], *, distortion: str,
+                  max_error_px: float | None, refine_joint: bool) -> _Solved:
+    """Solve; drop views above the threshold in any camera or the pair; repeat until none is dropped."""
+    keep = list(range(len(views.names)))
+    outliers: list[ViewError] = []
+    thr: list[float] | None = None
+    for _ in range(_MAX_ROUNDS):
+        objs = [obj] * len(keep)
+        pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
+        ml = solve_mono(objs, pl, size, distortion=distortion)
+        mr = solve_mono(objs, pr, size, distortion=distortion)
+        st = solve_stereo(objs, pl, pr, size, ml, mr, distortion=distortion, refine_joint=refine_joint)
+        sv = st.per_view_px.max(axis=1)
+        if thr is None:  # thresholds from the first solve only, so later rounds do not shave good views
+            thr = [outlier_threshold(e, max_error_px=max_error_px) for e in (ml.per_view_px, mr.per_view_px, sv)]
+        bad = [j for j in range(len(keep))
+               if ml.per_view_px[j] > thr[0] or mr.per_view_px[j] > thr[1] or sv[j] > thr[2]]
+        if not bad:
+            return _Solved(keep, ml, mr, st, thr[2], outliers)
+        if len(keep) - len(bad) < MIN_VIEWS:
+            log.warning("%d views exceed the outlier threshold (%.2f px) but dropping them would leave fewer "
+                        "than %d views; kept them", len(bad), thr[2], MIN_VIEWS)
+            return _Solved(keep, ml, mr, st, thr[2], outliers)
+        for j in bad:
+            outliers.append(ViewError(views.names[keep[j]], float(ml.per_view_px[j]), float(mr.per_view_px[j]),
+                                      float(sv[j]), used=False,
+                                      reason=_outlier_reason(ml.per_view_px[j], mr.per_view_px[j], sv[j], thr)))
+        keep = [k for j, k in enumerate(keep) if j not in set(bad)]
+    assert thr is not None
+    return _Solved(keep, ml, mr, st, thr[2], outliers)
+
+
+def _outlier_reason(left: float, right: float, pair: float, thr: Sequence[float]) -> str:
+    parts = [f"{what} RMS {err:.3f} px > {t:.3f} px" for what, err, t in
+             (("left", left, thr[0]), ("right", right, thr[1]), ("stereo", pair, thr[2])) if err > t]
+    return "outlier: " + ", ".join(parts)
+
+
+def epipolar_rms(profile: StereoProfile, left: Sequence[Corners], right: Sequence[Corners]) -> float:
+    """RMS (px) of the y differences of matching corners after undistortion and rectification."""
+    rect = stereo_rectification(profile)
+    dys = []
+    for pl, pr in zip(left, right, strict=True):
+        ul = cv2.undistortPoints(pl.reshape(-1, 1, 2).astype(np.float64), profile.left.K, profile.left.D,
+                                 R=rect.R1, P=rect.P1).reshape(-1, 2)
+        ur = cv2.undistortPoints(pr.reshape(-1, 1, 2).astype(np.float64), profile.right.K, profile.right.D,
+                                 R=rect.R2, P=rect.P2).reshape(-1, 2)
+        dys.append(ul[:, 1] - ur[:, 1])
+    return float(np.sqrt(np.mean(np.concatenate(dys) ** 2))) if dys else float("nan")
+
+
+def _uncertainty_warnings(profile: StereoProfile) -> list[str]:
+    out = []
+    for side, cam in (("left", profile.left), ("right", profile.right)):
+        s = cam.std
+        if s is None:
+            continue
+        for name, val, sd, limit in (("fx", cam.fx_px, s.fx_px, 0.005), ("fy", cam.fy_px, s.fy_px, 0.005),
+                                     ("cx", cam.width_px, s.cx_px, 0.01), ("cy", cam.height_px, s.cy_px, 0.01)):
+            if sd is not None and sd > limit * val:
+                out.append(f"{side} {name} is uncertain: std {sd:.2f} px is large; add views covering the "
+                           "image corners at varied tilt")
+    b_std = profile.extrinsics.baseline_std_m
+    if b_std is not None and b_std > 0.01 * profile.baseline_m:
+        out.append(f"baseline is uncertain: std {b_std * 1000:.2f} mm of {profile.baseline_m * 1000:.1f} mm; "
+                   "add views at several distances")
+    return out
+
+
+def _right_poses(st: StereoSolution) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]]:
+    r_lr = cv2.Rodrigues(st.R)[0]
+    rv, tv = [], []
+    for r, t in zip(st.rvecs, st.tvecs, strict=True):
+        r3, t3 = cv2.composeRT(r.reshape(3, 1), t.reshape(3, 1), r_lr, st.T.reshape(3, 1))[:2]
+        rv.append(np.asarray(r3, np.float64).reshape(3))
+        tv.append(np.asarray(t3, np.float64).reshape(3))
+    return rv, tv
+
+
+def calibrate_stereo_detections(
+    pairs: Sequence[tuple[str, Detection, Detection]], *, pattern: tuple[int, int], square_m: float, name: str,
+    distortion: str, max_error_px: float | None, refine_joint: bool, sources: Sequence[SourceFile],
+    extra_dropped: Sequence[DroppedView] = (), sample_paths: tuple[Path, Path] | None = None,
+) -> StereoCalibration:
+    """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`."""
+    size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
+    views = stereo_views(pairs, pattern)
+    readable = sum(d.status != "unreadable" for _, dl, dr in pairs for d in (dl, dr))
+    if not any(d.status == "ok" for _, dl, dr in pairs for d in (dl, dr)):
+        raise no_board_error(readable, pattern)
+    dropped = [*extra_dropped, *views.dropped]
+    if len(views.names) < MIN_VIEWS:
+        raise too_few_error(len(views.names), dropped)
+    obj = board_object_points(pattern, square_m)
+    solved = _solve_rounds(views, obj, size, distortion=distortion, max_error_px=max_error_px,
+                           refine_joint=refine_joint)
+    st, keep = solved.stereo, solved.keep
+    pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
+    cov_t, _sigma = baseline_covariance([obj] * len(keep), pl, pr, st, distortion=distortion)
+    u = st.T / np.linalg.norm(st.T)
+    baseline_std = float(np.sqrt(max(0.0, float(u @ cov_t @ u))))
+    left_cam = make_camera(st.K1, st.D1, size, solved.mono_l.std, distortion=distortion)
+    right_cam = make_camera(st.K2, st.D2, size, solved.mono_r.std, distortion=distortion)
+    dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in solved.outliers]
+    cov_l, cov_r = coverage_of(pl, size), coverage_of(pr, size)
+    spread = pose_spread(st.rvecs, st.tvecs, pl, pattern=pattern, square_m=square_m, size=size)
+    quality = CalibrationQuality(
+        pattern=pattern, square_m=square_m, views_used=len(keep), views_dropped=tuple(dropped),
+        rms_left_px=solved.mono_l.rms_px, rms_right_px=solved.mono_r.rms_px, rms_stereo_px=st.rms_px,
+        coverage_left=cov_l.fraction, coverage_right=cov_r.fraction, tilt_range_deg=spread.tilt_deg,
+        distance_range_m=spread.distance_m, distortion_terms=distortion)
+    profile = StereoProfile(
+        name=name, left=left_cam, right=right_cam,
+        extrinsics=Extrinsics(rotation=tuple(tuple(float(v) for v in row) for row in st.R),  # type: ignore[arg-type]
+                              translation_m=tuple(float(v) for v in st.T),  # type: ignore[arg-type]
+                              baseline_std_m=baseline_std),
+        provenance=Provenance(origin="real", method=_METHOD + (" + joint refinement" if refine_joint else ""),
+                              sources=tuple(sources), calibration=quality))
+    epi = epipolar_rms(profile, pl, pr)
+    profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
+        update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
+    warnings = [*_uncertainty_warnings(profile), *coverage_warnings("left", cov_l, spread),
+                *coverage_warnings("right", cov_r)]
+    for w in warnings:
+        log.warning("%s", w)
+    view_errors = [ViewError(views.names[k], float(st_l), float(st_r), float(max(s)), used=True)
+                   for k, st_l, st_r, s in zip(keep, solved.mono_l.per_view_px, solved.mono_r.per_view_px,
+                                               st.per_view_px, strict=True)]
+    return StereoCalibration(
+        profile=profile, views=tuple(view_errors + solved.outliers), dropped=tuple(dropped),
+        threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
+        epipolar_rms_px=epi, warnings=tuple(warnings), used_names=tuple(views.names[k] for k in keep),
+        corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
+        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)))
+
+
+def _file_items(left: Sequence[Path], right: Sequence[Path], hashes: dict[Path, str]) -> Iterator[DetectItem]:
+    for pl, pr in zip(left, right, strict=True):
+        for p in (pl, pr):
+            hashes[p] = sha256_file(p)
+            yield DetectItem(name=_display(p), sha256=hashes[p], source=p)
+
+
+def _display(path: Path) -> str:
+    return f"{path.parent.name}/{path.name}" if path.parent.name else path.name
+
+
+def _pairs_of(stream: Iterable[Detection], names: Sequence[str]) -> list[tuple[str, Detection, Detection]]:
+    it = iter(stream)
+    return [(name, next(it), next(it)) for name in names]
+
+
+def calibrate_stereo(
+    left_paths: Sequence[Path], right_paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6),
+    square_m: float = 0.025, name: str = "calibrated", distortion: str = "k1k2", max_error_px: float | None = None,
+    refine_joint: bool = False, jobs: int | None = None, cache_dir: Path | None = None,
+    progress: ProgressCallback | None = None, names: Sequence[str] | None = None,
+    unpaired: Sequence[Path] = (),
+) -> StereoCalibration:
+    """Calibrate a stereo pair from chessboard image files (``left_paths[i]`` pairs with ``right_paths[i]``).
+
+    Args:
+        pattern: inner corners ``(cols, rows)``; square_m: square size in metres.
+        distortion: ``k1k2`` (k3 and tangential fixed), ``plumb_bob`` (5 terms) or ``rational`` (8 terms).
+        max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
+        refine_joint: refine intrinsics and extrinsics jointly after the fixed-intrinsics stereo solve.
+        jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
+        names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
+
+    Raises:
+        CalibrationError: mixed sizes, no board at all (wrong pattern), fewer than MIN_VIEWS usable pairs.
+    """
+    if len(left_paths) != len(right_paths):
+        raise CalibrationError(f"{len(left_paths)} left but {len(right_paths)} right images",
+                               hint="pass the same number of left and right images")
+    hashes: dict[Path, str] = {}
+    jobs = jobs or os.cpu_count() or 1
+    cache = CornerCache(cache_dir) if cache_dir is not None else None
+    stream = detect_stream(_file_items(left_paths, right_paths, hashes), pattern=pattern, jobs=jobs, cache=cache,
+                           total=2 * len(left_paths), progress=progress)
+    pairs = _pairs_of(stream, names if names is not None else [Path(p).stem for p in left_paths])
+    for p in unpaired:
+        log.warning("%s has no partner image; skipped", p)
+    extra = [DroppedView(name=_display(Path(p)), reason="unpaired: no partner image") for p in unpaired]
+    sources = [SourceFile(path=str(p), sha256=hashes[p]) for p in (*left_paths, *right_paths)]
+    report(progress, 0, 1, "solving")
+    result = calibrate_stereo_detections(
+        pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
+        refine_joint=refine_joint, sources=sources, extra_dropped=extra)
+    report(progress, 1, 1, "solving")
+    first = result.used_names[0]
+    idx = [n for n, _, _ in pairs].index(first)
+    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])))

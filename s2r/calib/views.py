@@ -1,0 +1,146 @@
+"""From detections to calibration views: pairing, order checks, input checks with one-line errors.
+
+A *view* is one image pair (or one image, mono) whose board was found; everything else becomes a
+:class:`~s2r.profile.DroppedView` naming the file and why it was skipped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.calib.detect import Detection
+from s2r.errors import CalibrationError
+from s2r.profile import DroppedView
+
+__all__ = [
+    "MIN_VIEWS",
+    "StereoViews",
+    "check_sizes",
+    "match_corner_order",
+    "no_board_error",
+    "stereo_views",
+    "too_few_error",
+]
+
+#: Fewest usable views (pairs, or images for mono) a calibration accepts.
+MIN_VIEWS = 5
+Corners = NDArray[np.float32]
+
+
+def _axes(corners: Corners, pattern: tuple[int, int]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Unit mean row direction (first to last column) and column direction (first to last row) of a grid."""
+    cols, rows = pattern
+    g = corners.reshape(rows, cols, 2).astype(np.float64)
+    row_dir = np.mean(g[:, -1] - g[:, 0], axis=0)
+    col_dir = np.mean(g[-1, :] - g[0, :], axis=0)
+    return row_dir / (np.linalg.norm(row_dir) + 1e-12), col_dir / (np.linalg.norm(col_dir) + 1e-12)
+
+
+def _candidates(corners: Corners, pattern: tuple[int, int]) -> list[Corners]:
+    """The right grid's possible orderings: as found, reversed (180 deg), and for square grids 90 deg turns."""
+    cols, rows = pattern
+    out = [corners, corners[::-1].copy()]
+    if cols == rows:
+        g = corners.reshape(rows, cols, 2)
+        out += [np.rot90(g, k).reshape(-1, 2).copy() for k in (1, 3)]
+    return out
+
+
+def match_corner_order(left: Corners, right: Corners, pattern: tuple[int, int]) -> tuple[Corners, bool]:
+    """Reorder ``right`` so its corner k is the same board corner as ``left``'s corner k.
+
+    Compares the whole grids' mean row and column directions (robust to a few noisy corners), which
+    agree between the two cameras of a stereo pair; returns ``(right corners, reordered?)``.
+    """
+    lr, lc = _axes(left, pattern)
+    best, best_score = right, -np.inf
+    for cand in _candidates(right, pattern):
+        rr, rc = _axes(cand, pattern)
+        score = float(lr @ rr + lc @ rc)
+        if score > best_score:
+            best, best_score = cand, score
+    return best, best is not right
+
+
+def _label(det: Detection) -> str:
+    return det.name
+
+
+def check_sizes(detections: Sequence[Detection]) -> tuple[int, int]:
+    """The one image size (w, h) of all readable images; CalibrationError naming two files otherwise."""
+    first: Detection | None = None
+    for det in detections:
+        if det.size is None:
+            continue
+        if first is None:
+            first = det
+        elif det.size != first.size:
+            raise CalibrationError(
+                f"images differ in size: {first.name} is {first.size[0]}x{first.size[1]} "  # type: ignore[index]
+                f"but {det.name} is {det.size[0]}x{det.size[1]}", path=det.name,
+                hint="calibrate images of one resolution at a time")
+    if first is None or first.size is None:
+        raise CalibrationError("none of the images could be read", hint="check the files are PNG/JPEG images")
+    return first.size
+
+
+@dataclass(frozen=True)
+class StereoViews:
+    """Usable pairs: names, corners (N, 2) px per side, and every skipped image with its reason."""
+
+    names: tuple[str, ...]
+    left: tuple[Corners, ...]
+    right: tuple[Corners, ...]
+    reordered: tuple[str, ...]
+    dropped: tuple[DroppedView, ...]
+
+
+def _skip_reason(det: Detection) -> DroppedView:
+    return DroppedView(name=_label(det), reason=f"{det.status.replace('_', ' ')}: {det.detail}")
+
+
+def stereo_views(pairs: Sequence[tuple[str, Detection, Detection]], pattern: tuple[int, int]) -> StereoViews:
+    """Keep the pairs whose board was found in both images, with the right corners in the left's order."""
+    names: list[str] = []
+    left: list[Corners] = []
+    right: list[Corners] = []
+    reordered: list[str] = []
+    dropped: list[DroppedView] = []
+    for name, dl, dr in pairs:
+        bad = [d for d in (dl, dr) if d.status != "ok"]
+        if bad:
+            dropped.extend(_skip_reason(d) for d in bad)
+            continue
+        assert dl.corners is not None and dr.corners is not None
+        fixed, flipped = match_corner_order(dl.corners, dr.corners, pattern)
+        if flipped:
+            reordered.append(name)
+        names.append(name)
+        left.append(dl.corners)
+        right.append(fixed)
+    return StereoViews(tuple(names), tuple(left), tuple(right), tuple(reordered), tuple(dropped))
+
+
+def no_board_error(n_images: int, pattern: tuple[int, int]) -> CalibrationError:
+    """The error for 'no board anywhere', which is nearly always a wrong ``--pattern``."""
+    cols, rows = pattern
+    return CalibrationError(
+        f"no {cols}x{rows} chessboard found in any of the {n_images} readable images", field="--pattern",
+        hint=f"check --pattern: it counts INNER corners per row x column (a board of {cols + 1}x{rows + 1} "
+             f"squares is {cols}x{rows}), and --square is the square size in metres")
+
+
+def too_few_error(found: int, dropped: Sequence[DroppedView], *, what: str = "pairs") -> CalibrationError:
+    """The error for fewer usable views than :data:`MIN_VIEWS`, saying why the others failed."""
+    reasons: dict[str, int] = {}
+    for d in dropped:
+        key = d.reason.split(":")[0]
+        reasons[key] = reasons.get(key, 0) + 1
+    why = ", ".join(f"{n} {k}" for k, n in sorted(reasons.items())) or "no other images"
+    return CalibrationError(
+        f"only {found} usable {what} found, at least {MIN_VIEWS} needed; skipped images: {why}",
+        hint="record more views with the whole board visible in both cameras")
