@@ -87,7 +87,8 @@ def summary_lines(result: ValidationResult) -> list[str]:
     """The run as terminal lines: parameters, projection, resolution, recovery, depth, edits, verdict."""
     names = " vs ".join(f"{p.name} ({role})" for role, p in result.roles.items())
     s = result.settings
-    lines = [f"s2r validate: {names}  [{s.views} views, supersample {s.supersample}, preset {s.preset}, seed {s.seed}]"]
+    lines = [f"s2r validate: {names}  [{s.views} views at {s.supersample}x, scenes at {s.scene_supersample}x, "
+             f"preset {s.preset}, seed {s.seed}]"]
     if result.pair:
         lines += ["Parameters:", *_param_lines(result.params)]
         proj = "; ".join(f"{d.camera} mean {d.mean_px:.3g} p95 {d.p95_px:.3g} px" for d in result.projection)

@@ -1,7 +1,8 @@
 """The whole chain in --quick mode: render, calibrate, match and compare, on the shipped profiles.
 
-Kept to two runs (module-scoped): the seed's sim rig against the RealSense (text summary + HTML report, also
-opened in headless Chromium when installed), and the sim rig's self-check with the seed's SGBM preset (JSON).
+Kept to three runs: the seed's sim rig against the RealSense (text summary + HTML report, also opened in
+headless Chromium when installed), the sim rig against itself with the seed's SGBM preset (JSON), and the
+RealSense profile's one-profile self-check in a single process (--jobs 1).
 """
 
 from __future__ import annotations
@@ -39,8 +40,8 @@ def pair_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str, Path]:
 
 
 @pytest.fixture(scope="module")
-def self_check() -> tuple[int, dict[str, Any]]:
-    code, text = _run(["validate", SIM, "--quick", "--preset", "seed-sgbm", "--json"])
+def against_itself() -> tuple[int, dict[str, Any]]:
+    code, text = _run(["validate", SIM, SIM, "--quick", "--preset", "seed-sgbm", "--json"])
     return code, json.loads(text)
 
 
@@ -73,22 +74,33 @@ def test_report_is_one_self_contained_page(pair_run: tuple[int, str, Path]) -> N
 
 
 @pytest.mark.slow
-def test_self_check_passes_and_reports_the_seed_claim(self_check: tuple[int, dict[str, Any]]) -> None:
-    code, data = self_check
-    assert data["mode"] == "self-check" and data["failures"] == []
+def test_profile_against_itself_passes_and_reports_the_seed_claim(
+        against_itself: tuple[int, dict[str, Any]]) -> None:
+    code, data = against_itself
+    assert data["mode"] == "sim-vs-real" and data["failures"] == []
     assert code == 0
-    rows = data["recovery"]["profile"]["rows"]
-    # recovered within the predicted standard deviations (3 sigma) wherever the calibration predicts one
-    assert all(r["n_sigma"] <= 3.0 for r in rows if r["n_sigma"] is not None)
-    bins = data["depth"]["profile"]["bins"]
-    for b in bins:  # measured errors in the range of Intel's theoretical curve
-        assert b["median_pct"] <= 3 * b["theory_hi_pct"] + 0.5
+    assert all(abs(r["diff"]) < 1e-12 for r in data["parameters"])
+    assert all(p["max_px"] < 1e-9 for p in data["projection"])
+    for role in ("sim", "real"):
+        rows = data["recovery"][role]["rows"]
+        # recovered within the predicted standard deviations (3 sigma) wherever the calibration predicts one
+        assert all(r["n_sigma"] <= 3.0 for r in rows if r["n_sigma"] is not None)
+        for b in data["depth"][role]["bins"]:  # measured errors in the range of Intel's theoretical curve
+            assert b["median_pct"] <= 3 * b["theory_hi_pct"] + 0.5
     # the seed's claim (under 2 % within 3 m with its SGBM settings) holds on rendered planes
-    within = data["depth"]["profile"]["within_3m"]
+    within = data["depth"]["sim"]["within_3m"]
     assert data["settings"]["preset"] == "seed-sgbm"
     assert 0.0 < within["median_pct"] < 2.0 and within["fill_rate"] > 0.8
-    assert set(data["seconds"]) >= {"render_boards (profile)", "calibrate (profile)", "render_scenes (profile)",
-                                    "depth_pipeline (profile)", "total"}
+    assert set(data["seconds"]) >= {"render_boards (sim)", "calibrate (real)", "render_scenes (sim)",
+                                    "depth_pipeline (real)", "total"}
+
+
+@pytest.mark.slow
+def test_one_profile_self_check_in_one_process() -> None:
+    code, text = _run(["validate", REAL, "--quick", "--jobs", "1"])
+    assert code == 0, text
+    assert "PASS: all" in text and "Parameters:" not in text
+    assert "profile  " in text and "all within tolerance" in text
 
 
 def _chromium(*args: str, profile_dir: Path) -> subprocess.CompletedProcess[str]:
