@@ -96,13 +96,24 @@ def alternate(a: Callable[[], object], b: Callable[[], object], repeat: int
     return statistics.median(ta), statistics.median(tb), paired, min(ta) / max(min(tb), 1e-12)
 
 
+def cpu_seconds(run: Callable[[], object], repeat: int) -> float:
+    """Process CPU seconds (all threads) per call of ``run``, averaged over ``repeat`` calls."""
+    run()
+    start = time.process_time()
+    for _ in range(repeat):
+        run()
+    return (time.process_time() - start) / repeat
+
+
 def bench_presets(repeat: int, num_disparities: int | None) -> None:
     profile = bench_profile()
     left, right = textured_pair()
     print(f"640x480 BGR input, {repeat} alternating runs, median ms; ratio = pipeline core / plain OpenCV (median "
           "of back-to-back pairs, and of the minima); full = the preset with its default post-processing")
-    print(f"{'preset':11} {'ndisp':>5} {'plain':>7} {'core':>7} {'ratio':>6} {'(min)':>6}   {'full':>7} {'fps':>6}  "
-          "post")
+    print("cpu = process CPU time per frame of the full preset (all threads): 1/cpu is the frame rate a machine "
+          "with one free core would reach, a floor for 2 idle cores")
+    print(f"{'preset':11} {'ndisp':>5} {'plain':>7} {'core':>7} {'ratio':>6} {'(min)':>6}   {'full':>7} {'fps':>6} "
+          f"{'cpu':>7} {'fps':>6}  post")
     for preset in PRESETS:
         core = StereoPipeline(profile, preset=preset, postprocess=(), num_disparities=num_disparities)
         plain = plain_opencv(core)
@@ -110,8 +121,9 @@ def bench_presets(repeat: int, num_disparities: int | None) -> None:
                                                       lambda f=plain: f(left, right), repeat)
         full = StereoPipeline(profile, preset=preset, num_disparities=num_disparities)
         t_full = alternate(lambda p=full: p.compute(left, right), lambda: None, repeat)[0]
+        cpu = cpu_seconds(lambda p=full: p.compute(left, right), repeat)
         print(f"{preset:11} {core.config.num_disparities:5d} {1e3 * t_plain:7.2f} {1e3 * t_core:7.2f} "
-              f"{ratio:6.3f} {ratio_min:6.3f}   {1e3 * t_full:7.2f} {1 / t_full:6.1f}  "
+              f"{ratio:6.3f} {ratio_min:6.3f}   {1e3 * t_full:7.2f} {1 / t_full:6.1f} {1e3 * cpu:7.2f} {1 / cpu:6.1f}  "
               f"{'+'.join(full.postprocess) or '-'}", flush=True)
 
 
