@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
-from s2r.profile import StereoProfile
+from s2r.profile import Camera, StereoProfile
 from s2r.validate.params import ParamRow
 
 __all__ = ["Edit", "gazebo_hfov_rad", "right_joint_origin", "suggest_edits"]
@@ -63,6 +63,11 @@ def _failed(rows: list[ParamRow], *names: str) -> bool:
     return any(r.exceeds_tolerance for r in rows if r.name in names)
 
 
+def _off_centre(cam: Camera) -> float:
+    """Largest distance (pixels) of the principal point from the exact image centre ((W - 1) / 2, (H - 1) / 2)."""
+    return max(abs(cam.cx_px - (cam.width_px - 1) / 2.0), abs(cam.cy_px - (cam.height_px - 1) / 2.0))
+
+
 def _intrinsic_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow], *,
                      principal_point_px: float) -> list[Edit]:
     edits = []
@@ -78,8 +83,7 @@ def _intrinsic_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRo
     if _failed(rows, "left fy", "VFOV") and abs(real.left.fy_px - real.left.fx_px) > 1e-6 * real.left.fx_px:
         edits.append(Edit("fy", f"{sim.left.fy_px:.2f} px", f"{real.left.fy_px:.2f} px",
                           "Gazebo classic ties fy to fx; set gz-sim <lens><intrinsics><fy>"))
-    w, h = real.image_size
-    off_centre = max(abs(real.left.cx_px - (w - 1) / 2.0), abs(real.left.cy_px - (h - 1) / 2.0))
+    off_centre = max(_off_centre(real.left), _off_centre(sim.left))
     if _failed(rows, "left cx", "left cy", "right cx", "right cy") and off_centre > principal_point_px:
         edits.append(Edit("principal point", f"({sim.left.cx_px:.2f}, {sim.left.cy_px:.2f}) px",
                           f"({real.left.cx_px:.2f}, {real.left.cy_px:.2f}) px (OpenCV 0-based)",
@@ -96,8 +100,8 @@ def suggest_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow],
                   principal_point_px: float = 2.0) -> list[Edit]:
     """The edits to the sim description that remove each parameter difference beyond tolerance.
 
-    A principal-point edit is suggested only when the real principal point lies more than
-    ``principal_point_px`` from the image centre (a sim camera at the real resolution is centred).
+    A principal-point edit is suggested only when the real or the sim principal point lies more than
+    ``principal_point_px`` from its image centre (two centred cameras need only the resolution edit).
     """
     edits = _intrinsic_edits(sim, real, rows, principal_point_px=principal_point_px)
     if _failed(rows, "baseline", "inter-camera rotation"):

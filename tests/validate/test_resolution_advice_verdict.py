@@ -58,6 +58,13 @@ def test_edits_for_the_seed_rig_against_the_realsense() -> None:
     assert "export-gazebo realsense_d435_848x480" in edits["sensor XML"].where
 
 
+def test_off_centre_sim_principal_point_gets_an_edit() -> None:
+    sim, real = make_rig(cx=322.5), make_rig()
+    edits = {e.parameter: e for e in suggest_edits(sim, real, parameter_table(sim, real, Tolerances()))}
+    assert edits["principal point"].target.startswith("(319.50, 239.50)")
+    assert set(edits) == {"principal point", "sensor XML"}
+
+
 def test_no_edits_when_profiles_match() -> None:
     rig = make_rig()
     assert suggest_edits(rig, rig, parameter_table(rig, rig, Tolerances())) == []
