@@ -143,10 +143,8 @@ class StereoPipeline:
                 f"images are {size[0]}x{size[1]} but profile {self.profile.name} is {expected[0]}x{expected[1]}",
                 field="image size", hint="pass images of the profile's size, or resize=True (--resize) to rescale "
                 "the intrinsics")
-        scaled = self.profile.model_copy(update={"left": self.profile.left.scaled(*size),
-                                                 "right": self.profile.right.scaled(*size)})
         with self._lock:
-            geo = self._geometries.setdefault(size, self._build(scaled))
+            geo = self._geometries.setdefault(size, self._build(_scaled_profile(self.profile, size)))
         return geo
 
     def _matchers(self, config: MatcherConfig) -> Any:
@@ -206,6 +204,17 @@ class StereoPipeline:
         disparity, depth, valid = to_metric(raw, geo.rectification, min_disparity=geo.config.min_disparity)
         return DepthResult(rect_left=rl, rect_right=rr, disparity=disparity, depth=depth, valid=valid,
                            Q=geo.rectification.Q)
+
+
+def _scaled_profile(profile: StereoProfile, size: tuple[int, int]) -> StereoProfile:
+    """``profile`` at another image size: intrinsics scaled about pixel edges, a fixed disparity range scaled
+    with the width (rounded up to 16)."""
+    matcher = profile.matcher
+    if matcher.num_disparities is not None:
+        nd = int(np.ceil(matcher.num_disparities * size[0] / profile.image_size[0] / 16.0)) * 16
+        matcher = matcher.model_copy(update={"num_disparities": max(16, nd)})
+    return profile.model_copy(update={"left": profile.left.scaled(*size), "right": profile.right.scaled(*size),
+                                      "matcher": matcher})
 
 
 _POOL: list[ThreadPoolExecutor] = []

@@ -210,3 +210,12 @@ def test_shipped_profiles_build_every_preset(name: str) -> None:
     for preset in PRESETS:
         pipe = StereoPipeline(name, preset=preset)
         assert pipe.profile.name == name and pipe.maps.left_map1.shape[:2] == pipe.profile.image_size[::-1]
+
+
+def test_resize_scales_a_fixed_disparity_range(pair: SynthPair) -> None:
+    rig = make_rig(name="vga_rig")
+    rig = rig.model_copy(update={"matcher": rig.matcher.model_copy(update={"num_disparities": 112})})
+    pipe = StereoPipeline(rig, resize=True)
+    assert pipe.config.num_disparities == 112
+    pipe.compute(pair.left, pair.right)
+    assert pipe.geometry_for((320, 240)).config.num_disparities == 64  # 112 / 2 = 56, up to 16
