@@ -41,7 +41,7 @@ def _parameters(result: ValidationResult) -> ReportSection:
              "FAIL" if r.exceeds_tolerance else "ok"] for r in result.params]
     table = html_table(["parameter", "unit", "sim", "real", "sim - real", "limit", "real std", "> 3 sigma", ""],
                        rows, row_classes=[_cls(not r.exceeds_tolerance) for r in result.params])
-    return ReportSection("Parameters", tables=[table])
+    return ReportSection("Parameters", tables=[table], paragraphs=[html.escape(n) for n in result.notes])
 
 
 def _heat_map(diff: Any) -> str:

@@ -97,6 +97,7 @@ class ValidationResult:
     depth: dict[str, DepthAccuracy] = field(default_factory=dict)
     edits: list[Edit] = field(default_factory=list)
     gazebo_xml: str | None = None
+    notes: list[str] = field(default_factory=list)
     checks: list[Check] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -126,7 +127,7 @@ class ValidationResult:
             "resolution": {k: v.as_dict() for k, v in self.resolution.items()},
             "recovery": {k: v.as_dict() for k, v in self.recovery.items()},
             "depth": {k: v.as_dict() for k, v in self.depth.items()},
-            "edits": [e.as_dict() for e in self.edits], "gazebo_xml": self.gazebo_xml,
+            "edits": [e.as_dict() for e in self.edits], "gazebo_xml": self.gazebo_xml, "notes": self.notes,
             "checks": [c.as_dict() for c in self.checks], "failures": [c.text for c in self.failures],
             "seconds": self.seconds,
         }
@@ -194,6 +195,11 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
         result.resolution[role] = depth_resolution(profile, RESOLUTION_DISTANCES_M)
     if real is None:
         return
+    conventions = (sim.provenance.convention, real.provenance.convention)
+    if conventions[0] != conventions[1]:
+        result.notes.append(
+            f"pixel conventions differ (sim {conventions[0]}, real {conventions[1]}): compared as declared; a "
+            "gazebo-classic camera publishes its principal point 1 px right of and below the rendered centre")
     result.params = parameter_table(sim, real, tol)
     result.projection = projection_difference(sim, real, distance_m=tol.working_distance_m)
     result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)

@@ -93,6 +93,7 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Parameters:", *_param_lines(result.params)]
         proj = "; ".join(f"{d.camera} mean {d.mean_px:.3g} p95 {d.p95_px:.3g} px" for d in result.projection)
         lines.append(f"Projection difference at {result.tolerances.working_distance_m:g} m: {proj}")
+        lines += [f"Note: {note}" for note in result.notes]
     lines += ["Depth resolution (Intel model):", *_resolution_lines(result)]
     if result.recovery:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
