@@ -40,6 +40,10 @@ def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) ->
     except OSError as exc:
         raise S2RError(f"cannot write: {exc.strerror}", path=out, hint="choose a writable location") from exc
     try:
+        # mkstemp creates 0600 files; give the output the permissions a plain open() would (0666 & ~umask).
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()

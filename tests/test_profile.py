@@ -120,3 +120,13 @@ def test_shipped_realsense_figures_follow_reference() -> None:
     assert float(p.depth_rms_m(2.0)) == pytest.approx(0.015, abs=0.0006)
     hd = s2r.load_profile("realsense_d435_1280x720")
     assert 636 <= hd.left.fx_px <= 645 and 634 <= hd.left.cx_px <= 642
+
+
+def test_atomic_writes_get_ordinary_permissions(rig: StereoProfile, tmp_path: Path) -> None:
+    import os
+
+    out = dump_profile(rig, tmp_path / "p.yaml")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
