@@ -22,7 +22,7 @@ import pytest
 from s2r.cli import main
 
 SIM, REAL = "gazebo_dual_camera", "realsense_d435_848x480"
-CHROMIUM = "/usr/bin/chromium"
+CHROMIUM = "/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else (shutil.which("chromium") or "")
 
 
 def _run(argv: list[str]) -> tuple[int, str]:
@@ -112,10 +112,10 @@ def _chromium(*args: str, profile_dir: Path) -> subprocess.CompletedProcess[str]
 
 @pytest.mark.slow
 @pytest.mark.browser
-def test_report_renders_in_headless_chromium(pair_run: tuple[int, str, Path], tmp_path: Path) -> None:
-    if not Path(CHROMIUM).exists() and shutil.which("chromium") is None:
+def test_report_renders_in_headless_chromium(request: pytest.FixtureRequest, tmp_path: Path) -> None:
+    if not CHROMIUM:
         pytest.skip("chromium is not installed (make test-browser installs it)")
-    _, _, page = pair_run
+    _, _, page = request.getfixturevalue("pair_run")
     # 1. every embedded image decodes: a probe page holding the report's <img> tags writes their sizes
     imgs = re.findall(r"<img src='[^']+'", page.read_text())
     probe = tmp_path / "probe.html"
