@@ -30,10 +30,12 @@ def register(sub: Any) -> None:
     parser.add_argument("real", metavar="REAL", nargs="?", help="real profile name or path")
     parser.add_argument("--report", metavar="DIR", help="write DIR/validation.html (self-contained)")
     parser.add_argument("--tolerances", metavar="FILE", help="YAML file of tolerance overrides (key: number)")
-    parser.add_argument("--quick", action="store_true", help="fewer views and planes, no supersampling (~15 s)")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer board views (1x) and planes, no slanted plane (~15 s)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered boards and textures")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: cores)")
-    parser.add_argument("--preset", default="profile", help="depth pipeline preset for both profiles")
+    parser.add_argument("--preset", default="profile",
+                        help="depth pipeline preset for both profiles (profile, seed-sgbm, fast, bm, ros-default)")
     parser.add_argument("--distances", metavar="M,M,...", help="plane distances in metres (default by mode)")
     add_json(parser)
     add_force(parser)
