@@ -165,17 +165,27 @@ def _intrinsic_columns(jac: FloatArray, free: tuple[int, ...]) -> FloatArray:
     return np.hstack([jac[:, 6:10], jac[:, [10 + i for i in free]]])
 
 
+def _schur(Jg: FloatArray, Jv: FloatArray) -> FloatArray:
+    """Information of the global columns ``Jg`` with the view columns ``Jv`` eliminated (J^T J Schur)."""
+    B = Jg.T @ Jv
+    return np.asarray(Jg.T @ Jg - B @ np.linalg.solve(Jv.T @ Jv, B.T), np.float64)
+
+
 def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: Sequence[Points],
-                        stereo: StereoSolution, *, distortion: str = "k1k2") -> tuple[FloatArray, float]:
+                        stereo: StereoSolution, *, distortion: str = "k1k2",
+                        fixed_intrinsics: bool = True) -> tuple[FloatArray, float]:
     """Covariance (3x3, m^2) of the translation T and the residual sigma (px) of the stereo problem.
 
     Parameters: free intrinsics of both cameras, rotation vector and T of the pair, and one 6-dof board
-    pose per view (eliminated by a Schur complement). Uses the stereo solution's K/D and board poses.
+    pose per view (eliminated by Schur complements). Jointly refined (``fixed_intrinsics`` False):
+    ``cov = sigma^2 (J^T J)^-1``. Two-step (intrinsics from the mono solves, then held fixed, as here by
+    default): ``cov_E = sigma^2 A_EE^-1 + S cov_K S^T`` with ``S = -A_EE^-1 A_EK`` the sensitivity of the
+    extrinsics to the intrinsics and ``cov_K`` the mono solves' intrinsics covariance.
     """
     free = FREE_DISTORTION[distortion]
     ni = 4 + len(free)
     ng = 2 * ni + 6
-    A = np.zeros((ng, ng))
+    A, A_l, A_r = np.zeros((ng, ng)), np.zeros((ni, ni)), np.zeros((ni, ni))
     r_lr = np.asarray(cv2.Rodrigues(stereo.R)[0], np.float64).reshape(3)
     ssr, m = 0.0, 0
     for obj_i, pl, pr, rv, tv in zip(obj, img_l, img_r, stereo.rvecs, stereo.tvecs, strict=True):
@@ -190,15 +200,23 @@ def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: S
         jr_r, jr_t = jr[:, 0:3], jr[:, 3:6]
         Jg[n:, 2 * ni:2 * ni + 3] = jr_r @ dr3dr2 + jr_t @ dt3dr2
         Jg[n:, 2 * ni + 3:] = jr_t @ dt3dt2
-        Jv[:n, :3], Jv[:n, 3:] = jl[:, 0:3], jl[:, 3:6]
+        Jv[:n, :] = jl[:, 0:6]
         Jv[n:, :3] = jr_r @ dr3dr1 + jr_t @ dt3dr1
         Jv[n:, 3:] = jr_t @ dt3dt1
-        C = Jv.T @ Jv
-        B = Jg.T @ Jv
-        A += Jg.T @ Jg - B @ np.linalg.solve(C, B.T)
+        A += _schur(Jg, Jv)
+        A_l += _schur(Jg[:n, :ni], jl[:, 0:6])
+        A_r += _schur(Jg[n:, ni:2 * ni], jr[:, 0:6])
         ssr += float(np.sum((proj_l - pl.reshape(-1)) ** 2) + np.sum((proj_r - pr.reshape(-1)) ** 2))
         m += 2 * n
-    dof = max(1, m - ng - 6 * len(obj))
-    sigma2 = ssr / dof
-    cov = sigma2 * np.linalg.pinv(A)
-    return np.asarray(cov[2 * ni + 3:, 2 * ni + 3:], np.float64), float(np.sqrt(sigma2))
+    sigma2 = ssr / max(1, m - ng - 6 * len(obj))
+    if not fixed_intrinsics:
+        cov = sigma2 * np.linalg.pinv(A)
+        return np.asarray(cov[2 * ni + 3:, 2 * ni + 3:], np.float64), float(np.sqrt(sigma2))
+    k, e = slice(0, 2 * ni), slice(2 * ni, ng)
+    A_ee_inv = np.linalg.pinv(A[e, e])
+    S = -A_ee_inv @ A[e, k]
+    cov_k = np.zeros((2 * ni, 2 * ni))
+    cov_k[:ni, :ni] = sigma2 * np.linalg.pinv(A_l)
+    cov_k[ni:, ni:] = sigma2 * np.linalg.pinv(A_r)
+    cov_e = sigma2 * A_ee_inv + S @ cov_k @ S.T
+    return np.asarray(cov_e[3:, 3:], np.float64), float(np.sqrt(sigma2))

@@ -240,7 +240,8 @@ def calibrate_stereo_detections(
                            refine_joint=refine_joint)
     st, keep = solved.stereo, solved.keep
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-    cov_t, _sigma = baseline_covariance([obj] * len(keep), pl, pr, st, distortion=distortion)
+    cov_t, _sigma = baseline_covariance([obj] * len(keep), pl, pr, st, distortion=distortion,
+                                       fixed_intrinsics=not refine_joint)
     u = st.T / np.linalg.norm(st.T)
     baseline_std = float(np.sqrt(max(0.0, float(u @ cov_t @ u))))
     left_cam = make_camera(st.K1, st.D1, size, solved.mono_l.std, distortion=distortion)

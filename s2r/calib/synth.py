@@ -117,7 +117,7 @@ def _inside(pts: FloatArray, size: tuple[int, int], margin: float) -> bool:
 
 def random_board_poses(profile: StereoProfile, *, views: int, pattern: tuple[int, int], square_m: float,
                        seed: int, distance_m: tuple[float, float] | None = None,
-                       max_tilt_deg: float = 40.0, margin_px: float = 3.0) -> Iterator[BoardPose]:
+                       max_tilt_deg: float = 50.0, margin_px: float = 3.0) -> Iterator[BoardPose]:
     """Seeded board poses (in the left optical frame) whose corners all land inside BOTH images.
 
     Board centres are spread over the image (stratified over a 3x3 grid of target cells), distances drawn

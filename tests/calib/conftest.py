@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -19,8 +20,23 @@ def distorted_truth() -> StereoProfile:
 
 @pytest.fixture(scope="session")
 def synthetic_set(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, StereoProfile]:
-    """24 board pairs of the distorted rig in left/ and right/ (PNG), noise sigma 1.5 grey levels."""
+    """30 board pairs of the distorted rig in left/ and right/ (PNG), noise sigma 1.5 grey levels."""
     folder = tmp_path_factory.mktemp("synthetic") / "set"
     truth = distorted_truth()
-    write_stereo_set(truth, folder, views=24, seed=7)
+    write_stereo_set(truth, folder, views=30, seed=7)
     return folder, truth
+
+
+def copy_pairs(src: Path, dst: Path, indices: range | list[int]) -> Path:
+    """Copy pairs ``indices`` of a left/ right/ set into ``dst`` (same layout); returns ``dst``."""
+    for side in ("left", "right"):
+        (dst / side).mkdir(parents=True, exist_ok=True)
+        for i in indices:
+            shutil.copy(src / side / f"{i:02d}.png", dst / side / f"{i:02d}.png")
+    return dst
+
+
+@pytest.fixture
+def small_set(tmp_path: Path, synthetic_set: tuple[Path, StereoProfile]) -> Path:
+    """Eight pairs of the synthetic set in ``tmp_path/set`` (left/, right/), free to damage."""
+    return copy_pairs(synthetic_set[0], tmp_path / "set", range(8))

@@ -1,0 +1,84 @@
+"""`s2r calibrate` end to end on synthetic sets: profile, JSON, report, cache, mono, globs, joint refinement."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from s2r.cli import main
+from s2r.formats.s2r_yaml import load_mono_profile, load_profile_file
+from s2r.profile import StereoProfile
+
+
+def test_known_rig_via_cli_with_report_and_cache(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    folder, truth = synthetic_set
+    out, report = tmp_path / "rig.yaml", tmp_path / "report"
+    code = main(["calibrate", str(folder), "-o", str(out), "--json", "--report", str(report), "--jobs", "2"])
+    first = json.loads(capsys.readouterr().out)
+    assert code == 0 and first["detections_from_cache"] == 0
+    profile = load_profile_file(out)
+    assert profile.name == "rig" and abs(profile.left.fx_px - truth.left.fx_px) < 0.0015 * truth.left.fx_px
+    q = profile.provenance.calibration
+    assert q is not None and q.views_used + len(q.views_dropped) == 30 and q.coverage_left is not None
+    assert all(len(s.sha256) == 64 for s in profile.provenance.sources)
+    page = (report / "index.html").read_text()
+    assert page.count("data:image/png;base64,") == 4  # errors, coverage, overlay, rectified pair
+    for title in ("Per-view errors", "Coverage", "rectified pair", "relative std"):
+        assert title in page
+    # a re-run with only a solver option changed reads every detection from the cache next to the output
+    code = main(["calibrate", str(folder), "-o", str(out), "--json", "--force", "--max-error", "0.5"])
+    second = json.loads(capsys.readouterr().out)
+    assert code == 0 and second["detections_from_cache"] == 60
+    assert (tmp_path / "rig.yaml.corners").is_dir()
+
+
+def test_refine_joint_recovers_the_rig_tightly(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    folder, truth = synthetic_set
+    out = tmp_path / "joint.yaml"
+    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--refine-joint", "--no-cache"]) == 0
+    capsys.readouterr()
+    p = load_profile_file(out)
+    assert "joint refinement" in p.provenance.method
+    for cam, true in ((p.left, truth.left), (p.right, truth.right)):
+        assert abs(cam.fx_px - true.fx_px) < 0.0015 * true.fx_px
+        assert abs(cam.cx_px - true.cx_px) < 0.7 and abs(cam.cy_px - true.cy_px) < 0.7
+    b_std = p.extrinsics.baseline_std_m
+    assert b_std is not None and abs(p.baseline_m - truth.baseline_m) <= min(3 * b_std, 0.002 * truth.baseline_m)
+
+
+def test_mono_calibration_writes_a_camera_profile(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    folder, truth = synthetic_set
+    out = tmp_path / "mono.yaml"
+    code = main(["calibrate", "--mono", "--left", str(folder / "right" / "*.png"), "-o", str(out), "--json",
+                 "--report", str(tmp_path / "rep")])
+    figures = json.loads(capsys.readouterr().out)
+    assert code == 0 and figures["quality"]["views_used"] >= 25
+    cam = load_mono_profile(out).camera
+    assert abs(cam.fx_px - truth.right.fx_px) < 0.0015 * truth.right.fx_px
+    assert cam.std is not None and cam.std.fx_px is not None
+    assert abs(cam.fx_px - truth.right.fx_px) <= 3 * cam.std.fx_px
+    assert "Per-view errors" in (tmp_path / "rep" / "index.html").read_text()
+
+
+def test_prefixed_files_and_globs_pair_by_number(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    folder, _ = synthetic_set
+    flat = tmp_path / "flat"
+    flat.mkdir()
+    for i in range(8):
+        shutil.copy(folder / "left" / f"{i:02d}.png", flat / f"left{i + 1:02d}.png")
+        shutil.copy(folder / "right" / f"{i:02d}.png", flat / f"right{i + 1}.png")  # no zero padding
+    code = main(["calibrate", str(flat), "-o", str(tmp_path / "a.yaml"), "--json", "--jobs", "1"])
+    a = json.loads(capsys.readouterr().out)
+    code_b = main(["calibrate", "--left", str(flat / "left*.png"), "--right", str(flat / "right*.png"),
+                   "-o", str(tmp_path / "b.yaml"), "--json", "--jobs", "1"])
+    b = json.loads(capsys.readouterr().out)
+    assert code == code_b == 0
+    assert a["quality"]["views_used"] == b["quality"]["views_used"] == 8 - len(a["dropped"])
+    assert a["baseline_m"] == pytest.approx(b["baseline_m"])

@@ -1,0 +1,34 @@
+"""Solver conventions: outlier threshold, coverage grid, corner-order fix inside a full solve."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from s2r.calib.coverage import coverage_of, coverage_warnings
+from s2r.calib.solve import distortion_flags, outlier_threshold
+from s2r.errors import CalibrationError
+
+
+def test_outlier_threshold_is_robust_and_floored() -> None:
+    # median 1.0, MAD 0 -> max(1 + 0, 2 x 1.0, 0.3) = 2.0 px
+    assert outlier_threshold(np.array([1.0, 1.0, 1.0, 1.0, 10.0])) == pytest.approx(2.0)
+    # median 0.1, MAD 0.01 -> max(0.1 + 5 * 1.4826 * 0.01, 0.2, 0.3) = 0.3 px floor
+    assert outlier_threshold(np.array([0.09, 0.1, 0.11, 0.1, 0.1])) == pytest.approx(0.3)
+    errs = np.array([0.4, 0.5, 0.6, 0.5, 0.5])  # median 0.5, MAD 0 -> 2 x median = 1.0
+    assert outlier_threshold(errs) == pytest.approx(1.0)
+    assert outlier_threshold(errs, max_error_px=0.55) == 0.55
+
+
+def test_coverage_grid_counts_corners_per_cell() -> None:
+    # 640x480 split 8x6: cells of 80x80 px; corner (10, 10) -> cell (0, 0); (639, 479) -> (5, 7)
+    cov = coverage_of([np.array([[10.0, 10.0], [639.0, 479.0], [85.0, 10.0]], np.float32)], (640, 480))
+    assert cov.counts[0, 0] == 1 and cov.counts[5, 7] == 1 and cov.counts[0, 1] == 1
+    assert cov.counts.sum() == 3 and cov.fraction == pytest.approx(3 / 48)
+    warnings = coverage_warnings("left", cov)
+    assert any("top-right" in w and "add views with the board near the top-right" in w for w in warnings)
+
+
+def test_unknown_distortion_model_is_refused() -> None:
+    with pytest.raises(CalibrationError, match="--distortion"):
+        distortion_flags("fisheye")
