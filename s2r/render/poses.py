@@ -23,10 +23,10 @@ __all__ = ["BoardGeometry", "distance_range_m", "sample_board_poses"]
 FloatArray = NDArray[np.float64]
 
 #: Fraction of the image the board (with its margin) spans at the nearest / farthest sampled distance.
-FILL_NEAR, FILL_FAR, FILL_MAX = 0.60, 0.25, 0.90
+FILL_NEAR, FILL_FAR, FILL_MAX = 0.60, 0.40, 0.90
 #: Smallest square, pixels: on a fronto-parallel board, and after tilt in any sampled view.
 MIN_FRONTAL_SQUARE_PX, MIN_SQUARE_PX = 12.0, 8.0
-MAX_TILT_DEG, MAX_VIEW_ANGLE_DEG = 45.0, 70.0
+MIN_TILT_DEG, MAX_TILT_DEG, MAX_VIEW_ANGLE_DEG = 30.0, 45.0, 70.0
 #: In-plane roll range: never near 0, because pixel-aligned edges alias worst (no anti-aliasing).
 MIN_ROLL_DEG, MAX_ROLL_DEG = 8.0, 30.0
 _EDGE_MARGIN_PX = 3.0
@@ -168,7 +168,7 @@ def sample_board_poses(profile: StereoProfile, board: BoardGeometry, *, views: i
         frac = (k * 0.6180339887 + rng.uniform(0.0, 0.15)) % 1.0
         d0 = lo * (hi / lo) ** frac
         band = k % 3
-        angle = math.radians(rng.uniform(band, band + 1) * MAX_TILT_DEG / 3.0)
+        angle = math.radians(MIN_TILT_DEG + rng.uniform(band, band + 1) * (MAX_TILT_DEG - MIN_TILT_DEG) / 3.0)
         phi = rng.uniform(0.0, 2.0 * math.pi)
         axis = np.array([math.cos(phi), math.sin(phi), 0.0])
         roll = math.radians(rng.uniform(MIN_ROLL_DEG, MAX_ROLL_DEG) * rng.choice([-1.0, 1.0]))
