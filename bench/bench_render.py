@@ -63,15 +63,17 @@ def main() -> None:
         pair = _median_ms(lambda: render_stereo_images(job))
         print(f"{'s2r stereo pair 1x (both cameras)':<34}{pair:8.1f}{pair / base:18.2f}")
     print()
-    print("render_board_set, 20 views at 2x, 640x480 (wall time incl. PNG writes)")
+    print("render_board_set, 20 views at 2x, 640x480 (wall time incl. PNG writes; best of 2 interleaved runs)")
     cores = os.cpu_count() or 1
-    walls = {}
-    for jobs in sorted({1, cores}):
-        with tempfile.TemporaryDirectory() as out:
-            t0 = time.perf_counter()
-            render_board_set(plain, Path(out) / "set", views=20, supersample=2, jobs=jobs)
-            walls[jobs] = time.perf_counter() - t0
-        print(f"  jobs={jobs}: {walls[jobs]:6.2f} s  ({walls[jobs] / 20 * 1000:6.1f} ms per stereo view)")
+    walls: dict[int, float] = {}
+    for _ in range(2):
+        for jobs in sorted({1, cores}):
+            with tempfile.TemporaryDirectory() as out:
+                t0 = time.perf_counter()
+                render_board_set(plain, Path(out) / "set", views=20, supersample=2, jobs=jobs)
+                walls[jobs] = min(walls.get(jobs, float("inf")), time.perf_counter() - t0)
+    for jobs, wall in walls.items():
+        print(f"  jobs={jobs}: {wall:6.2f} s  ({wall / 20 * 1000:6.1f} ms per stereo view)")
     if cores > 1:
         print(f"  parallel speed-up with {cores} processes: {walls[1] / walls[cores]:.2f}x")
 

@@ -8,6 +8,7 @@ quads are written from corners listed top-left, top-right, bottom-right, bottom-
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,7 +101,7 @@ def set_world(surfaces: Sequence[Surface]) -> None:
     process (board views only move the board), otherwise the world is rebuilt.
     """
     cid = client()
-    key = (cid, tuple((s.mesh_path, s.texture_path) for s in surfaces))
+    key = (os.getpid(), cid, tuple((s.mesh_path, s.texture_path) for s in surfaces))  # forks rebuild
     if _STATE["key"] != key:
         p.resetSimulation(physicsClientId=cid)
         textures: dict[str, int] = {}
