@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from s2r.errors import RenderError
 from s2r.profile import StereoProfile
+from s2r.progress import ProgressCallback, report
 from s2r.validate.resolution import theory_rel_rms
 
 __all__ = ["DEFAULT_BINS_M", "BinStats", "DepthAccuracy", "DepthSamples", "bin_stats", "measure_depth_accuracy",
@@ -147,7 +148,8 @@ def _sample_index(frames: Sequence[Any]) -> int:
 
 
 def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[float]]], *, supersample: int,
-                seed: int, jobs: int | None) -> tuple[list[Any], list[tuple[str, Sequence[float]]]]:
+                seed: int, jobs: int | None, progress: ProgressCallback | None
+                ) -> tuple[list[Any], list[tuple[str, Sequence[float]]]]:
     """Frames of every scene; scenes after the first are optional (skipped with a warning if unrenderable)."""
     from s2r.render.scenes import render_scene
 
@@ -156,7 +158,7 @@ def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[flo
     for k, (scene, distances) in enumerate(scenes):
         try:
             frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
-                                   seed=seed, jobs=jobs)
+                                   seed=seed, jobs=jobs, progress=progress)
         except RenderError as exc:
             if k == 0:
                 raise
@@ -169,7 +171,8 @@ def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[flo
 def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
                            scenes: Sequence[tuple[str, Sequence[float]]] = (("planes", (0.5, 1.0, 2.0, 3.0, 5.0)),),
                            bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M, supersample: int = 2,
-                           seed: int = 0, jobs: int | None = 1) -> DepthAccuracy:
+                           seed: int = 0, jobs: int | None = 1,
+                           progress: ProgressCallback | None = None) -> DepthAccuracy:
     """Render each ``(scene, distances_m)`` through ``profile``, run the depth pipeline with ``preset``, score.
 
     Every frame's pixels are pooled and binned by true depth (metres, rectified left frame).
@@ -177,7 +180,8 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
     from s2r.depth.pipeline import StereoPipeline
 
     start = time.perf_counter()
-    frames, rendered_scenes = _render_all(profile, scenes, supersample=supersample, seed=seed, jobs=jobs)
+    frames, rendered_scenes = _render_all(profile, scenes, supersample=supersample, seed=seed, jobs=jobs,
+                                          progress=progress)
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None
@@ -187,6 +191,7 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
         t, r = pixel_errors(result.depth, frame.depth_rect_m, frame.disparity_rect_px)
         truths.append(t)
         rels.append(r)
+        report(progress, i + 1, len(frames), "depth pipeline")
         if i == keep:
             samples = DepthSamples(f"{frame.description.get('scene', '')} {frame.name}", frame.left,
                                    np.asarray(result.rect_left), result.depth, frame.depth_rect_m)

@@ -18,6 +18,7 @@ from typing import Any
 
 from s2r.geometry import rotation_angle_rad
 from s2r.profile import Camera, StereoProfile
+from s2r.progress import ProgressCallback
 from s2r.validate.tolerances import Tolerances
 
 __all__ = ["RecoveryResult", "RecoveryRow", "compare_recovered", "recover_calibration"]
@@ -99,7 +100,8 @@ def compare_recovered(declared: StereoProfile, recovered: StereoProfile, tol: To
 
 
 def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int = 20, supersample: int = 2,
-                        seed: int = 0, jobs: int | None = 1, work_dir: Path | None = None) -> RecoveryResult:
+                        seed: int = 0, jobs: int | None = 1, work_dir: Path | None = None,
+                        progress: ProgressCallback | None = None) -> RecoveryResult:
     """Render ``views`` board pairs through ``profile``, calibrate them, compare (see module doc).
 
     Images go to a temporary folder (or ``work_dir``), removed afterwards when temporary.
@@ -111,14 +113,14 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         out_dir = Path(tmp) if work_dir is None else work_dir
         start = time.perf_counter()
         boards = render_board_set(profile, out_dir / "boards", views=views, seed=seed, supersample=supersample,
-                                  jobs=jobs, force=True)
+                                  jobs=jobs, force=True, progress=progress)
         rendered = time.perf_counter()
         calib_log = logging.getLogger("s2r.calib")
         level = calib_log.level
         calib_log.setLevel(logging.ERROR)  # coverage advice is kept in the result, not shown as warnings
         try:
             calib = calibrate_stereo(boards.left_paths, boards.right_paths, name=f"{profile.name}_recovered",
-                                     jobs=jobs)
+                                     jobs=jobs, progress=progress)
         finally:
             calib_log.setLevel(level)
         done = time.perf_counter()

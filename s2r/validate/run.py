@@ -11,19 +11,19 @@ import logging
 import os
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
 from s2r.errors import ValidateError
 from s2r.profile import StereoProfile
-from s2r.progress import ProgressCallback, report
 from s2r.validate.advice import Edit, suggest_edits
-from s2r.validate.depth_accuracy import DEFAULT_BINS_M, DepthAccuracy, measure_depth_accuracy
+from s2r.validate.depth_accuracy import DepthAccuracy
 from s2r.validate.params import ParamRow, parameter_table
 from s2r.validate.projection import ProjectionDiff, projection_difference
-from s2r.validate.recovery import RecoveryResult, recover_calibration
+from s2r.validate.recovery import RecoveryResult
 from s2r.validate.resolution import DepthResolution, depth_resolution
+from s2r.validate.settings import FULL, QUICK, Settings
+from s2r.validate.tasks import run_tasks
 from s2r.validate.tolerances import Tolerances
 from s2r.validate.verdict import (
     Check,
@@ -40,47 +40,6 @@ log = logging.getLogger(__name__)
 
 #: Distances (metres) of the theoretical depth-resolution table.
 RESOLUTION_DISTANCES_M = (0.5, 1.0, 2.0, 3.0, 5.0)
-
-
-@dataclass(frozen=True)
-class Settings:
-    """How much work each stage does: board views and their supersampling, the distances (metres) of the
-    fronto-parallel planes, further ``(scene, distances)`` pairs ("slanted", "room"), and the scenes'
-    supersampling (kept at 2: without anti-aliasing, 1x renders add matching error that is not the camera's)."""
-
-    @property
-    def scenes(self) -> tuple[tuple[str, tuple[float, ...]], ...]:
-        """Every ``(scene, distances_m)`` rendered for depth accuracy, the planes first."""
-        return (("planes", self.distances_m), *self.extra_scenes)
-
-    @property
-    def all_distances_m(self) -> tuple[float, ...]:
-        """Every distance of every scene, metres, sorted."""
-        return tuple(sorted({d for _, ds in self.scenes for d in ds}))
-
-
-    views: int
-    supersample: int
-    distances_m: tuple[float, ...]
-    extra_scenes: tuple[tuple[str, tuple[float, ...]], ...] = ()
-    scene_supersample: int = 2
-    preset: str = "profile"
-    seed: int = 0
-    bins_m: tuple[tuple[float, float], ...] = DEFAULT_BINS_M
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain mapping for JSON."""
-        return {"views": self.views, "supersample": self.supersample, "scene_supersample": self.scene_supersample,
-                "distances_m": list(self.distances_m),
-                "scenes": {name: list(ds) for name, ds in self.scenes}, "preset": self.preset, "seed": self.seed,
-                "bins_m": [list(b) for b in self.bins_m]}
-
-
-#: Default settings (at most about 60 s for two profiles on 2 cores).
-FULL = Settings(views=20, supersample=2, distances_m=(0.6, 0.9, 1.25, 1.75, 2.25, 2.75, 3.5, 4.5),
-                extra_scenes=(("slanted", (1.5,)),))
-#: ``--quick`` settings (at most about 15 s): fewer views (not supersampled) and planes, no slanted plane.
-QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0))
 
 
 @dataclass
@@ -150,34 +109,6 @@ def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[f
             "--preset, or pass --distances inside that range")
 
 
-def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances) -> Any:
-    if kind == "recovery":
-        return recover_calibration(profile, tol, views=settings.views, supersample=settings.supersample,
-                                   seed=settings.seed, jobs=1)
-    return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes, bins=settings.bins_m,
-                                  supersample=settings.scene_supersample, seed=settings.seed, jobs=1)
-
-
-def _run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Tolerances, jobs: int,
-               progress: ProgressCallback | None) -> dict[tuple[str, str], Any]:
-    tasks = [(kind, role) for kind in ("depth", "recovery") for role in roles]  # longest first
-    results: dict[tuple[str, str], Any] = {}
-    report(progress, 0, len(tasks), "validate")
-    if jobs <= 1:
-        for i, (kind, role) in enumerate(tasks):
-            results[(kind, role)] = _task(kind, roles[role], settings, tol)
-            report(progress, i + 1, len(tasks), f"{kind} {role}")
-        return results
-    with ProcessPoolExecutor(max_workers=min(jobs, len(tasks))) as pool:
-        futures: dict[Future[Any], tuple[str, str]] = {
-            pool.submit(_task, kind, roles[role], settings, tol): (kind, role) for kind, role in tasks}
-        for i, fut in enumerate(as_completed(futures)):
-            key = futures[fut]
-            results[key] = fut.result()
-            report(progress, i + 1, len(tasks), f"{key[0]} {key[1]}")
-    return results
-
-
 def _gazebo_xml(real: StereoProfile) -> str | None:
     try:
         from s2r.sources.gazebo_export import export_gazebo
@@ -236,7 +167,7 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
     _static_stages(result, sim, real)
     result.seconds["static"] = time.perf_counter() - start
     workers = jobs if jobs is not None else (os.cpu_count() or 1)
-    outputs = _run_tasks(roles, settings, tol, workers, progress)
+    outputs = run_tasks(roles, settings, tol, jobs=workers, progress=progress)
     for (kind, role), value in sorted(outputs.items(), key=lambda item: list(roles).index(item[0][1])):
         if kind == "recovery":
             result.recovery[role] = value
