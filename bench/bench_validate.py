@@ -12,6 +12,7 @@ load: compare the ratios measured side by side in one run, not absolute times ac
 from __future__ import annotations
 
 import argparse
+import logging
 import tempfile
 import time
 from pathlib import Path
@@ -99,6 +100,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-full", action="store_true", help="time only --quick settings")
     args = parser.parse_args()
+    logging.getLogger("s2r").setLevel(logging.ERROR)  # calibration coverage advice is not a benchmark figure
     _stage_table("--quick", QUICK)
     if not args.skip_full:
         _stage_table("default", FULL)
