@@ -8,6 +8,7 @@ Inner corner (i, j) sits at ``(i * square_m, j * square_m, 0)``. Poses are ``T_l
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ MIN_TILT_DEG, MAX_TILT_DEG, MAX_VIEW_ANGLE_DEG = 30.0, 45.0, 70.0
 #: In-plane roll range: never near 0, because pixel-aligned edges alias worst (no anti-aliasing).
 MIN_ROLL_DEG, MAX_ROLL_DEG = 8.0, 30.0
 _EDGE_MARGIN_PX = 3.0
-_ATTEMPTS = 60
+_SHRINK_STEPS, _RELAX_STEPS = 21, 30
 
 
 @dataclass(frozen=True)
@@ -147,13 +148,26 @@ def _candidate(profile: StereoProfile, board: BoardGeometry, target: FloatArray,
     return T
 
 
+def _schedule(d0: float, hi: float) -> Iterator[tuple[float, float, float]]:
+    """Fallbacks ``(shrink, distance, relax)`` for a view that does not fit: at each pull toward the image
+    centre (``shrink`` 1 -> 0) first try moving the board back a little (the stereo overlap widens with
+    distance; far boards constrain the focal length less, so only a third of the way),
+    then reduce tilt and roll (``relax``) at the centre and the farthest distance."""
+    steps = [d0 + (hi - d0) * t for t in (0.0, 1 / 3)]
+    for shrink in np.linspace(1.0, 0.0, _SHRINK_STEPS):
+        for d in steps:
+            yield float(shrink), d, 1.0
+    for k in range(1, _RELAX_STEPS + 1):
+        yield 0.0, hi, 0.9**k
+
+
 def sample_board_poses(profile: StereoProfile, board: BoardGeometry, *, views: int, seed: int) -> list[FloatArray]:
     """``views`` poses ``T_left_board`` (4x4, metres), deterministic for ``seed``.
 
     View k aims the board centre at one of 9 image positions (corners, edge midpoints, centre; shuffled by
     the seed, with jitter), at a log-stratified distance, tilted by a stratified angle up to 45 deg about a
-    random in-plane axis and rolled 8-30 deg either way. A candidate that does not fit both images is pulled
-    toward the image centre, then un-tilted and moved back, until it fits.
+    random in-plane axis and rolled 8-30 deg either way. A candidate that does not fit both images is moved
+    back and pulled toward the image centre, then un-tilted, until it fits (see :func:`_schedule`).
     """
     lo, hi = distance_range_m(profile, board)
     rng = np.random.default_rng(seed)
@@ -172,10 +186,7 @@ def sample_board_poses(profile: StereoProfile, board: BoardGeometry, *, views: i
         phi = rng.uniform(0.0, 2.0 * math.pi)
         axis = np.array([math.cos(phi), math.sin(phi), 0.0])
         roll = math.radians(rng.uniform(MIN_ROLL_DEG, MAX_ROLL_DEG) * rng.choice([-1.0, 1.0]))
-        for attempt in range(_ATTEMPTS):
-            shrink = max(0.0, 1.0 - attempt / 20.0)
-            relax = 0.9 ** max(0, attempt - 20)
-            d = d0 + (hi - d0) * min(1.0, max(0, attempt - 20) / 20.0)
+        for shrink, d, relax in _schedule(d0, hi):
             T = _candidate(profile, board, centre + shrink * pos * half, d, angle * relax * axis, roll * relax)
             if _fits(profile, board, T):
                 poses.append(T)
