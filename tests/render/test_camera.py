@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from s2r.profile import StereoProfile
 from s2r.render.camera import (
     PIXEL_OFFSET,
     PinholeView,
@@ -15,6 +16,8 @@ from s2r.render.camera import (
     render_pinhole,
     view_matrix,
 )
+from s2r.render.rig import stereo_setups
+from s2r.render.sensor import prepared
 from s2r.render.textures import checkerboard_texture, speckle_texture, write_png
 from s2r.render.world import Surface, set_world, write_mesh
 
@@ -95,3 +98,18 @@ def test_speckle_is_seeded_and_not_repeating() -> None:
     corr = np.corrcoef([t.ravel() for t in tiles])
     assert np.max(np.abs(corr - np.eye(len(tiles)))) < 0.9  # no tile repeats another
     assert grey.std() > 25  # contrast to match on
+
+
+def test_supersampling_scales_k_about_pixel_edges(rig: StereoProfile) -> None:
+    """S = 2: f_hi = 2 f, c_hi = 2 (c + 0.5) - 0.5; output pixel u samples the wide render at 2 (u + 0.5) - 0.5."""
+    left, right = stereo_setups(rig, supersample=2)
+    prep = prepared(left)
+    K = prep.wide.K
+    assert (prep.wide.width, prep.wide.height) == (1280, 960) and prep.map_hi is None
+    assert K[0, 0] == pytest.approx(2 * rig.left.fx_px) and K[1, 1] == pytest.approx(2 * rig.left.fy_px)
+    assert K[0, 2] == pytest.approx(2 * (rig.left.cx_px + 0.5) - 0.5)
+    assert K[1, 2] == pytest.approx(2 * (rig.left.cy_px + 0.5) - 0.5)
+    assert prep.map_lo[0][0, :3] == pytest.approx([0.5, 2.5, 4.5], abs=1e-4)
+    assert prep.map_lo[1][:3, 0] == pytest.approx([0.5, 2.5, 4.5], abs=1e-4)
+    np.testing.assert_allclose(right.T_cam_world[:3, :3], rig.R)
+    np.testing.assert_allclose(right.T_cam_world[:3, 3], rig.T)  # X_right = R X_left + T
