@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -17,10 +18,13 @@ ResultT = TypeVar("ResultT")
 
 
 def resolve_jobs(jobs: int | None, count: int) -> int:
-    """Worker count: ``jobs`` (default ``os.cpu_count()``), at most ``count``, at least 1."""
+    """Worker count: ``jobs`` (default ``os.cpu_count()``), at most ``count``, at least 1 (1 inside a
+    daemonic pool worker, which may not start processes)."""
     if jobs is not None and jobs < 1:
         raise RenderError(f"jobs must be at least 1, got {jobs}", field="jobs", hint="pass --jobs 1 or more")
     wanted = jobs if jobs is not None else (os.cpu_count() or 1)
+    if multiprocessing.current_process().daemon:
+        return 1  # a pool worker cannot start its own pool: render in this process
     return max(1, min(wanted, count))
 
 

@@ -162,3 +162,16 @@ def test_plain_opencv_calibration_recovers_the_profile(tmp_path: Path, distorted
     rms, *_, R, T, _, _ = cv2.stereoCalibrate(objs, pl, pr, Kl, Dl, Kr, Dr, size, flags=cv2.CALIB_FIX_INTRINSIC)
     assert float(np.linalg.norm(T)) == pytest.approx(rig.baseline_m, rel=0.002)
     assert math.degrees(rotation_angle_rad(R.T @ rig.R)) < 0.15  # cx/cy errors of ~0.5 px tilt R by ~0.05 deg
+
+
+def _render_in_pool_worker(out: str) -> int:
+    profile = make_rig()
+    return len(render_board_set(profile, out, views=2, supersample=1, jobs=2).poses)
+
+
+def test_render_inside_a_pool_worker_falls_back_to_one_process(tmp_path: Path) -> None:
+    """A daemonic multiprocessing.Pool worker cannot start processes; rendering falls back to in-process."""
+    import multiprocessing
+
+    with multiprocessing.Pool(1) as pool:
+        assert pool.apply(_render_in_pool_worker, (str(tmp_path / "set"),)) == 2
