@@ -240,6 +240,9 @@ class CalibrationQuality(_Model):
     square_m: float = Field(gt=0)
     views_used: int = Field(ge=0)
     views_dropped: tuple[DroppedView, ...] = ()
+    #: views whose board was found (more than ``views_used`` when outliers were dropped or, for very large
+    #: sets, only the most diverse views were solved); None when not recorded.
+    views_detected: int | None = Field(default=None, ge=0)
     rms_left_px: float | None = None
     rms_right_px: float | None = None
     rms_stereo_px: float | None = None

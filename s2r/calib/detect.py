@@ -2,8 +2,9 @@
 
 Detection follows ROS camera_calibration: images larger than 640x480 are detected on an INTER_AREA
 downscaled copy and the corners refined at full resolution. The classic detector
-(``findChessboardCorners`` with ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK) runs first, the
-sector-based ``findChessboardCornersSB`` (NORMALIZE_IMAGE | EXHAUSTIVE) is the fallback.
+(``findChessboardCorners`` with ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK) runs first (on large
+images also at full resolution, for steeply tilted boards), the sector-based ``findChessboardCornersSB``
+(NORMALIZE_IMAGE) is the fallback.
 ``cornerSubPix`` uses a window fitted to the board: 0.4 x the smallest distance between neighbouring
 corners, clamped to 2..11 px (half-size), instead of a fixed 11x11 (half-size) window that would swallow
 neighbouring corners of small or distant boards.
@@ -44,12 +45,13 @@ __all__ = [
 ]
 
 #: Bumped whenever detection changes so stale cache entries are ignored.
-DETECTOR_VERSION = 3
+DETECTOR_VERSION = 5
 #: Images with more pixels than this are detected on a downscaled copy (as ROS does).
 DETECT_AREA_PX = 640 * 480
 _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-#: EXHAUSTIVE: finds strongly tilted boards that FAST_CHECK rejects (about 0.2 s on an empty 640x360 image).
-_SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
+#: Without EXHAUSTIVE: that flag finds a few more strongly tilted boards but costs about 0.2 s on every
+#: 640x360 image without a board (0.03-0.05 s without it), which dominates long recordings.
+_SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 Status = Literal["ok", "no_board", "unreadable"]
@@ -61,7 +63,8 @@ class Detection:
     """Detection result of one image.
 
     ``size`` is ``(width, height)`` in pixels (None when unreadable); ``corners`` (N, 2) float32 pixels
-    when ``status == "ok"``; ``detector`` is ``"classic"`` or ``"sb"``; ``detail`` says why it failed.
+    when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"`` or ``"sb"``; ``detail`` says
+    why it failed.
     """
 
     name: str
@@ -97,35 +100,54 @@ def refine_window(corners: Corners, pattern: tuple[int, int]) -> int:
     return int(min(11, max(2, math.floor(0.4 * min_dist))))
 
 
-def _find_on(image: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
+def _classic(image: NDArray[np.uint8], pattern: tuple[int, int]) -> Corners | None:
     ok, corners = cv2.findChessboardCorners(image, pattern, flags=_CLASSIC_FLAGS)
-    if ok:
-        return np.asarray(corners, np.float32).reshape(-1, 2), "classic"
+    return np.asarray(corners, np.float32).reshape(-1, 2) if ok else None
+
+
+def _sector_based(image: NDArray[np.uint8], pattern: tuple[int, int]) -> Corners | None:
     ok, corners = cv2.findChessboardCornersSB(image, pattern, flags=_SB_FLAGS)
-    if ok:
-        return np.asarray(corners, np.float32).reshape(-1, 2), "sb"
+    return np.asarray(corners, np.float32).reshape(-1, 2) if ok else None
+
+
+def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
+    """Unrefined corners in full-resolution pixels, trying cheap detectors first.
+
+    Large images: classic on the downscaled copy; classic at full resolution (steeply tilted boards whose
+    squares shrink to a few pixels when downscaled; FAST_CHECK keeps it cheap without a board); then the
+    sector-based detector on the downscaled copy. Small images: classic, then sector-based.
+    """
+    h, w = gray.shape[:2]
+    scale = math.sqrt(w * h / DETECT_AREA_PX)
+    if scale <= 1.0:
+        found = _classic(gray, pattern)
+        if found is not None:
+            return found, "classic"
+        found = _sector_based(gray, pattern)
+        return (found, "sb") if found is not None else (None, "")
+    small_size = (max(1, round(w / scale)), max(1, round(h / scale)))
+    small = np.asarray(cv2.resize(gray, small_size, interpolation=cv2.INTER_AREA), np.uint8)
+    to_full = np.array([w / small_size[0], h / small_size[1]], np.float32)
+    found = _classic(small, pattern)
+    if found is not None:
+        return ((found + 0.5) * to_full - 0.5).astype(np.float32), "classic"
+    found = _classic(gray, pattern)
+    if found is not None:
+        return found, "classic-full"
+    found = _sector_based(small, pattern)
+    if found is not None:
+        return ((found + 0.5) * to_full - 0.5).astype(np.float32), "sb"
     return None, ""
 
 
 def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
     """Find and refine the inner corners of a ``(cols, rows)`` chessboard in an 8-bit grey image (H, W).
 
-    Returns ``(corners (N, 2) float32 pixels or None, detector name)``.
+    Returns ``(corners (N, 2) float32 pixels or None, detector name)``; refinement is at full resolution.
     """
-    h, w = gray.shape[:2]
-    scale = math.sqrt(w * h / DETECT_AREA_PX)
-    if scale > 1.0:
-        small_size = (max(1, round(w / scale)), max(1, round(h / scale)))
-        small = np.asarray(cv2.resize(gray, small_size, interpolation=cv2.INTER_AREA), np.uint8)
-        found, detector = _find_on(small, pattern)
-        if found is None:
-            return None, ""
-        sx, sy = w / small_size[0], h / small_size[1]
-        found = ((found + 0.5) * np.array([sx, sy], np.float32) - 0.5).astype(np.float32)
-    else:
-        found, detector = _find_on(gray, pattern)
-        if found is None:
-            return None, ""
+    found, detector = _find(gray, pattern)
+    if found is None:
+        return None, ""
     win = refine_window(found, pattern)
     refined = cv2.cornerSubPix(gray, found.reshape(-1, 1, 2).copy(), (win, win), (-1, -1), _SUBPIX_CRITERIA)
     return np.asarray(refined, np.float32).reshape(-1, 2), detector

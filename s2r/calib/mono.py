@@ -17,7 +17,7 @@ from s2r.calib.detect import CornerCache, DetectItem, detect_stream
 from s2r.calib.solve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.stereo import make_camera
 from s2r.calib.synth import board_object_points
-from s2r.calib.views import MIN_VIEWS, check_sizes, no_board_error, too_few_error
+from s2r.calib.views import MIN_VIEWS, check_sizes, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import CalibrationQuality, DroppedView, MonoProfile, Provenance, SourceFile
 from s2r.progress import ProgressCallback
@@ -63,9 +63,11 @@ class MonoCalibration:
 
 
 def _solve_with_outliers(names: list[str], corners: list[Corners], obj: Corners, size: tuple[int, int], *,
-                         distortion: str, max_error_px: float | None) -> tuple[list[int], MonoSolution, float,
-                                                                                 list[DroppedView]]:
-    keep = list(range(len(names)))
+                         pattern: tuple[int, int], distortion: str,
+                         max_error_px: float | None) -> tuple[list[int], MonoSolution, float, list[DroppedView]]:
+    keep = select_diverse(corners, pattern, size)
+    if len(keep) < len(names):
+        log.warning("%d usable images; solving with the %d most diverse (MAX_SOLVE_VIEWS)", len(names), len(keep))
     dropped: list[DroppedView] = []
     thr: float | None = None
     while True:
@@ -103,14 +105,15 @@ def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), 
     names = [d.name for _, d in ok]
     corners = [d.corners for _, d in ok if d.corners is not None]
     obj = board_object_points(pattern, square_m)
-    keep, sol, thr, outliers = _solve_with_outliers(names, corners, obj, size, distortion=distortion,
-                                                    max_error_px=max_error_px)
+    keep, sol, thr, outliers = _solve_with_outliers(names, corners, obj, size, pattern=pattern,
+                                                    distortion=distortion, max_error_px=max_error_px)
     used = [corners[i] for i in keep]
     cov = coverage_of(used, size)
     spread = pose_spread(sol.rvecs, sol.tvecs, used, pattern=pattern, square_m=square_m, size=size)
     dropped = (*skipped, *outliers)
     quality = CalibrationQuality(
         pattern=pattern, square_m=square_m, views_used=len(keep), views_dropped=dropped, rms_left_px=sol.rms_px,
+        views_detected=len(names),
         coverage_left=cov.fraction, tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m,
         distortion_terms=distortion)
     profile = MonoProfile(name=name, camera=make_camera(sol.K, sol.D, size, sol.std, distortion=distortion),

@@ -25,7 +25,15 @@ from s2r.calib.solve import (
     solve_stereo,
 )
 from s2r.calib.synth import board_object_points
-from s2r.calib.views import MIN_VIEWS, StereoViews, check_sizes, no_board_error, stereo_views, too_few_error
+from s2r.calib.views import (
+    MIN_VIEWS,
+    StereoViews,
+    check_sizes,
+    no_board_error,
+    select_diverse,
+    stereo_views,
+    too_few_error,
+)
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
 from s2r.profile import (
@@ -143,9 +151,8 @@ class _Solved:
 
 
 def _solve_rounds(views: StereoViews, obj: Corners, size: tuple[int, int], *, distortion: str,
-                  max_error_px: float | None, refine_joint: bool) -> _Solved:
-    """Solve; drop views above the threshold in any camera or the pair; repeat until none is dropped."""
-    keep = list(range(len(views.names)))
+                  max_error_px: float | None, refine_joint: bool, keep: list[int]) -> _Solved:
+    """Solve views ``keep``; drop views above the threshold in any camera or the pair; repeat until none is."""
     outliers: list[ViewError] = []
     thr: list[float] | None = None
     for _ in range(_MAX_ROUNDS):
@@ -236,8 +243,12 @@ def calibrate_stereo_detections(
     if len(views.names) < MIN_VIEWS:
         raise too_few_error(len(views.names), dropped)
     obj = board_object_points(pattern, square_m)
+    selected = select_diverse(views.left, pattern, size)
+    if len(selected) < len(views.names):
+        log.warning("%d usable pairs; solving with the %d most diverse (MAX_SOLVE_VIEWS)", len(views.names),
+                    len(selected))
     solved = _solve_rounds(views, obj, size, distortion=distortion, max_error_px=max_error_px,
-                           refine_joint=refine_joint)
+                           refine_joint=refine_joint, keep=selected)
     st, keep = solved.stereo, solved.keep
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
     cov_t, _sigma = baseline_covariance([obj] * len(keep), pl, pr, st, distortion=distortion,
@@ -251,6 +262,7 @@ def calibrate_stereo_detections(
     spread = pose_spread(st.rvecs, st.tvecs, pl, pattern=pattern, square_m=square_m, size=size)
     quality = CalibrationQuality(
         pattern=pattern, square_m=square_m, views_used=len(keep), views_dropped=tuple(dropped),
+        views_detected=len(views.names),
         rms_left_px=solved.mono_l.rms_px, rms_right_px=solved.mono_r.rms_px, rms_stereo_px=st.rms_px,
         coverage_left=cov_l.fraction, coverage_right=cov_r.fraction, tilt_range_deg=spread.tilt_deg,
         distance_range_m=spread.distance_m, distortion_terms=distortion)

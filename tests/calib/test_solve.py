@@ -32,3 +32,18 @@ def test_coverage_grid_counts_corners_per_cell() -> None:
 def test_unknown_distortion_model_is_refused() -> None:
     with pytest.raises(CalibrationError, match="--distortion"):
         distortion_flags("fisheye")
+
+
+def test_diverse_selection_keeps_every_region_of_a_large_set() -> None:
+    from s2r.calib.views import select_diverse
+
+    rng = np.random.default_rng(1)
+    grid = (np.mgrid[0:9, 0:6].T.reshape(-1, 2) * 20.0).astype(np.float32)
+    # 190 views crowded in the top-left corner, 10 spread over the rest of a 640x480 image
+    crowded = [grid + rng.uniform(0, 40, 2).astype(np.float32) for _ in range(190)]
+    spread = [grid + np.array([x, y], np.float32) for x in (200, 300, 440) for y in (150, 300, 370)] + [grid + 250]
+    views = crowded + spread
+    chosen = select_diverse(views, (9, 6), (640, 480), max_views=30)
+    assert len(chosen) == 30 and chosen == sorted(set(chosen))
+    assert set(range(190, 200)) <= set(chosen)  # every distinct view survives; the crowd is thinned
+    assert select_diverse(views[:12], (9, 6), (640, 480), max_views=30) == list(range(12))

@@ -1,0 +1,164 @@
+"""Benchmark `s2r calibrate` against a plain sequential OpenCV loop, side by side in one run.
+
+Data: 100 synthetic 1280x720 stereo pairs (80 with a 9x6 board, 20 without), made by warping a board
+texture through a known rig (s2r.calib.synth), cached under $TMPDIR/s2r_bench_calibrate.
+
+Plain OpenCV: for each image findChessboardCorners (the stereo_calib sample's flags ADAPTIVE_THRESH |
+NORMALIZE_IMAGE, and a second run adding FAST_CHECK) + cornerSubPix 11x11 at full resolution; then
+calibrateCamera twice and stereoCalibrate with CALIB_FIX_INTRINSIC, same distortion terms (k1 k2) as s2r.
+
+s2r: calibrate_stereo(..., jobs=2) with a fresh corner cache, then the same call again (cached re-run).
+Memory: peak RSS (resource.getrusage maxrss) of a subprocess calibrating 500 pairs (the 100 pairs linked
+five times under new names, cache off), main process and largest worker.
+
+Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
+Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from s2r.calib import calibrate_stereo
+from s2r.calib.synth import write_stereo_set
+from s2r.profile import Camera, Distortion, Extrinsics, Provenance, StereoProfile
+
+PATTERN, SQUARE = (9, 6), 0.025
+K1K2 = cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST
+
+
+def bench_rig() -> StereoProfile:
+    """1280x720, 70 deg HFOV, mild barrel distortion, 12 cm baseline, slightly rotated right camera."""
+    fx = 1280 / (2 * math.tan(math.radians(70) / 2))
+    cam = Camera(width_px=1280, height_px=720, fx_px=fx, fy_px=fx, cx_px=642.0, cy_px=358.5,
+                 distortion=Distortion(coefficients=(-0.08, 0.03, 0.0, 0.0, 0.0)))
+    R = cv2.Rodrigues(np.radians([0.2, -0.4, 0.1]))[0]
+    T = -R @ np.array([0.12, 0.0, 0.0])
+    return StereoProfile(name="bench_truth", left=cam, right=cam,
+                         extrinsics=Extrinsics(rotation=tuple(map(tuple, R.tolist())),  # type: ignore[arg-type]
+                                               translation_m=tuple(T.tolist())),  # type: ignore[arg-type]
+                         provenance=Provenance(origin="sim", method="bench"))
+
+
+def dataset(pairs: int, blank: int) -> tuple[list[Path], list[Path]]:
+    folder = Path(tempfile.gettempdir()) / "s2r_bench_calibrate" / f"{pairs}_{blank}"
+    done = folder / "done"
+    if not done.exists():
+        t0 = time.perf_counter()
+        write_stereo_set(bench_rig(), folder, views=pairs - blank, blank_views=blank, seed=11, noise_sigma=2.0)
+        done.write_text("ok")
+        print(f"generated {pairs} pairs in {time.perf_counter() - t0:.1f} s into {folder}")
+    return sorted((folder / "left").glob("*.png")), sorted((folder / "right").glob("*.png"))
+
+
+def plain_opencv(left: list[Path], right: list[Path], *, fast_check: bool) -> tuple[float, dict[str, float]]:
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | (cv2.CALIB_CB_FAST_CHECK * fast_check)
+    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
+    objp = np.zeros((PATTERN[0] * PATTERN[1], 3), np.float32)
+    objp[:, :2] = np.mgrid[0:PATTERN[0], 0:PATTERN[1]].T.reshape(-1, 2) * SQUARE
+    t0 = time.perf_counter()
+    pts_l, pts_r = [], []
+    for pl, pr in zip(left, right, strict=True):
+        found = []
+        for p in (pl, pr):
+            img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+            ok, c = cv2.findChessboardCorners(img, PATTERN, flags=flags)
+            found.append(cv2.cornerSubPix(img, c, (11, 11), (-1, -1), crit) if ok else None)
+        if found[0] is not None and found[1] is not None:
+            pts_l.append(found[0])
+            pts_r.append(found[1])
+    size = (1280, 720)
+    objs = [objp] * len(pts_l)
+    _, K1, D1, _, _ = cv2.calibrateCamera(objs, pts_l, size, None, None, flags=K1K2)
+    _, K2, D2, _, _ = cv2.calibrateCamera(objs, pts_r, size, None, None, flags=K1K2)
+    _, K1, D1, K2, D2, _R, T, _, _ = cv2.stereoCalibrate(objs, pts_l, pts_r, K1, D1, K2, D2, size,
+                                                        flags=cv2.CALIB_FIX_INTRINSIC | K1K2)
+    elapsed = time.perf_counter() - t0
+    return elapsed, {"fx": K1[0, 0], "fy": K1[1, 1], "cx": K1[0, 2], "cy": K1[1, 2],
+                     "fx_r": K2[0, 0], "baseline_mm": 1000 * float(np.linalg.norm(T)), "views": len(pts_l)}
+
+
+def s2r_run(left: list[Path], right: list[Path], cache: Path, jobs: int) -> tuple[float, dict[str, float]]:
+    t0 = time.perf_counter()
+    result = calibrate_stereo(left, right, pattern=PATTERN, square_m=SQUARE, jobs=jobs, cache_dir=cache)
+    elapsed = time.perf_counter() - t0
+    p = result.profile
+    q = p.provenance.calibration
+    return elapsed, {"fx": p.left.fx_px, "fy": p.left.fy_px, "cx": p.left.cx_px, "cy": p.left.cy_px,
+                     "fx_r": p.right.fx_px, "baseline_mm": 1000 * p.baseline_m,
+                     "views": q.views_used if q else 0}
+
+
+_MEMORY_CHILD = """
+import resource, sys
+from pathlib import Path
+from s2r.calib import calibrate_stereo
+left = sorted(Path(sys.argv[1], "left").glob("*.png")); right = sorted(Path(sys.argv[1], "right").glob("*.png"))
+r = calibrate_stereo(left, right, jobs=int(sys.argv[2]))
+print(len(left), r.profile.provenance.calibration.views_detected,
+      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+"""
+
+
+def memory_run(left: list[Path], right: list[Path], pairs: int, jobs: int) -> str:
+    with tempfile.TemporaryDirectory() as tmp:
+        for side, files in (("left", left), ("right", right)):
+            (Path(tmp) / side).mkdir()
+            for i in range(pairs):
+                os.symlink(files[i % len(files)], Path(tmp) / side / f"{i:04d}.png")
+        t0 = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", _MEMORY_CHILD, tmp, str(jobs)], capture_output=True, text=True,
+                             check=True, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+        n, detected, main_kb, child_kb = out.stdout.split()
+        return (f"{n} pairs ({detected} with a board) in {time.perf_counter() - t0:.1f} s: peak RSS main "
+                f"{int(main_kb) / 1024:.0f} MB, largest worker {int(child_kb) / 1024:.0f} MB, "
+                f"total at most {(int(main_kb) + jobs * int(child_kb)) / 1024:.0f} MB (target < 1024 MB)")
+
+
+def _row(label: str, seconds: float, fig: dict[str, float], truth: StereoProfile) -> str:
+    t = truth.left
+    return (f"{label:<34} {seconds:8.2f} s  views {int(fig['views']):3d}  fx {100 * (fig['fx'] / t.fx_px - 1):+.3f} %"
+            f"  fy {100 * (fig['fy'] / t.fy_px - 1):+.3f} %  cx {fig['cx'] - t.cx_px:+.2f}"
+            f"  cy {fig['cy'] - t.cy_px:+.2f} px  fx_r {100 * (fig['fx_r'] / truth.right.fx_px - 1):+.3f} %"
+            f"  B {fig['baseline_mm'] - 1000 * truth.baseline_m:+.3f} mm")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pairs", type=int, default=100)
+    parser.add_argument("--blank", type=int, default=20)
+    parser.add_argument("--memory-pairs", type=int, default=500)
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    truth = bench_rig()
+    left, right = dataset(args.pairs, args.blank)
+    print(f"{args.pairs} pairs 1280x720 ({args.blank} without a board), jobs={args.jobs}, {os.cpu_count()} cores; "
+          f"errors against the known rig (fx {truth.left.fx_px:.2f}, B {1000 * truth.baseline_m:.1f} mm)")
+    t_plain, f_plain = plain_opencv(left, right, fast_check=False)
+    print(_row("plain OpenCV (sample flags)", t_plain, f_plain, truth))
+    t_fast, f_fast = plain_opencv(left, right, fast_check=True)
+    print(_row("plain OpenCV + FAST_CHECK", t_fast, f_fast, truth))
+    with tempfile.TemporaryDirectory() as tmp:
+        t_s2r, f_s2r = s2r_run(left, right, Path(tmp) / "cache", args.jobs)
+        print(_row(f"s2r calibrate (jobs {args.jobs})", t_s2r, f_s2r, truth))
+        t_cached, f_cached = s2r_run(left, right, Path(tmp) / "cache", args.jobs)
+        print(_row("s2r calibrate, cached re-run", t_cached, f_cached, truth))
+    print(f"speed: s2r vs plain {t_plain / t_s2r:.1f}x (target >= 2x), vs plain+FAST_CHECK {t_fast / t_s2r:.1f}x; "
+          f"cached re-run vs first s2r run {t_s2r / t_cached:.1f}x, vs plain {t_plain / t_cached:.1f}x "
+          "(target >= 10x)")
+    if args.memory_pairs:
+        print("memory:", memory_run(left, right, args.memory_pairs, args.jobs))
+
+
+if __name__ == "__main__":
+    main()
