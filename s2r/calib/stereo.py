@@ -251,12 +251,6 @@ def calibrate_stereo_detections(
                            refine_joint=refine_joint, keep=selected)
     st, keep = solved.stereo, solved.keep
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-    cov_t, _sigma = baseline_covariance([obj] * len(keep), pl, pr, st, distortion=distortion,
-                                       fixed_intrinsics=not refine_joint)
-    u = st.T / np.linalg.norm(st.T)
-    baseline_std = float(np.sqrt(max(0.0, float(u @ cov_t @ u))))
-    left_cam = make_camera(st.K1, st.D1, size, solved.mono_l.std, distortion=distortion)
-    right_cam = make_camera(st.K2, st.D2, size, solved.mono_r.std, distortion=distortion)
     dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in solved.outliers]
     cov_l, cov_r = coverage_of(pl, size), coverage_of(pr, size)
     spread = pose_spread(st.rvecs, st.tvecs, pl, pattern=pattern, square_m=square_m, size=size)
@@ -266,16 +260,9 @@ def calibrate_stereo_detections(
         rms_left_px=solved.mono_l.rms_px, rms_right_px=solved.mono_r.rms_px, rms_stereo_px=st.rms_px,
         coverage_left=cov_l.fraction, coverage_right=cov_r.fraction, tilt_range_deg=spread.tilt_deg,
         distance_range_m=spread.distance_m, distortion_terms=distortion)
-    profile = StereoProfile(
-        name=name, left=left_cam, right=right_cam,
-        extrinsics=Extrinsics(rotation=tuple(tuple(float(v) for v in row) for row in st.R),  # type: ignore[arg-type]
-                              translation_m=tuple(float(v) for v in st.T),  # type: ignore[arg-type]
-                              baseline_std_m=baseline_std),
-        provenance=Provenance(origin="real", method=_METHOD + (" + joint refinement" if refine_joint else ""),
-                              sources=tuple(sources), calibration=quality))
-    epi = epipolar_rms(profile, pl, pr)
-    profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
-        update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
+    profile = _stereo_profile(name, solved, obj, pl, pr, size, distortion=distortion, refine_joint=refine_joint,
+                              sources=sources, quality=quality)
+    epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
     warnings = [*_uncertainty_warnings(profile), *coverage_warnings("left", cov_l, spread),
                 *coverage_warnings("right", cov_r)]
     for w in warnings:
@@ -286,9 +273,33 @@ def calibrate_stereo_detections(
     return StereoCalibration(
         profile=profile, views=tuple(view_errors + solved.outliers), dropped=tuple(dropped),
         threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
-        epipolar_rms_px=epi, warnings=tuple(warnings), used_names=tuple(views.names[k] for k in keep),
+        epipolar_rms_px=float("nan") if epi is None else epi, warnings=tuple(warnings),
+        used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)))
+
+
+def _stereo_profile(name: str, solved: _Solved, obj: Corners, pl: Sequence[Corners], pr: Sequence[Corners],
+                    size: tuple[int, int], *, distortion: str, refine_joint: bool, sources: Sequence[SourceFile],
+                    quality: CalibrationQuality) -> StereoProfile:
+    """The real profile: cameras with std devs, extrinsics with the baseline std, provenance with the
+    quality figures completed by the epipolar error after rectification."""
+    st = solved.stereo
+    cov_t, _sigma = baseline_covariance([obj] * len(pl), pl, pr, st, distortion=distortion,
+                                       fixed_intrinsics=not refine_joint)
+    u = st.T / np.linalg.norm(st.T)
+    profile = StereoProfile(
+        name=name,
+        left=make_camera(st.K1, st.D1, size, solved.mono_l.std, distortion=distortion),
+        right=make_camera(st.K2, st.D2, size, solved.mono_r.std, distortion=distortion),
+        extrinsics=Extrinsics(rotation=tuple(tuple(float(v) for v in row) for row in st.R),  # type: ignore[arg-type]
+                              translation_m=tuple(float(v) for v in st.T),  # type: ignore[arg-type]
+                              baseline_std_m=float(np.sqrt(max(0.0, float(u @ cov_t @ u))))),
+        provenance=Provenance(origin="real", method=_METHOD + (" + joint refinement" if refine_joint else ""),
+                              sources=tuple(sources), calibration=quality))
+    epi = epipolar_rms(profile, pl, pr)
+    return profile.model_copy(update={"provenance": profile.provenance.model_copy(
+        update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
 
 
 def _file_items(left: Sequence[Path], right: Sequence[Path], hashes: dict[Path, str]) -> Iterator[DetectItem]:

@@ -5,9 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from s2r.calib import calibrate_stereo, find_stereo_pairs
 from s2r.profile import StereoProfile
+from tests.calib.conftest import distorted_truth
 
 
 def test_synthetic_rig_recovered_within_tolerances(synthetic_set: tuple[Path, StereoProfile]) -> None:
@@ -30,3 +32,23 @@ def test_synthetic_rig_recovered_within_tolerances(synthetic_set: tuple[Path, St
     q = p.provenance.calibration
     assert q is not None and q.views_used >= 20 and q.rms_stereo_px is not None and q.rms_stereo_px < 0.3
     assert q.epipolar_rms_px is not None and q.epipolar_rms_px < 0.3
+
+
+@pytest.mark.slow
+def test_pybullet_rendered_boards_recover_the_rig(tmp_path: Path) -> None:
+    """The renderer's physically rendered boards (PyBullet TinyRenderer, 2x supersampled, distortion)."""
+    boards = pytest.importorskip("s2r.render.boards")
+    truth = distorted_truth()
+    rendered = boards.render_board_set(truth, tmp_path / "boards", views=20, seed=0, supersample=2,
+                                       noise_sigma=1.0, jobs=2)
+    result = calibrate_stereo(rendered.left_paths, rendered.right_paths, jobs=2)
+    p = result.profile
+    for cam, true in ((p.left, truth.left), (p.right, truth.right)):
+        assert cam.std is not None
+        for key, tol in (("fx_px", 0.0015 * true.fx_px), ("fy_px", 0.0015 * true.fy_px), ("cx_px", 0.7),
+                         ("cy_px", 0.7)):
+            got, want, sd = getattr(cam, key), getattr(true, key), getattr(cam.std, key)
+            assert abs(got - want) <= min(tol, 3 * sd), (key, got, want, sd)
+    b_std = p.extrinsics.baseline_std_m
+    assert b_std is not None
+    assert abs(p.baseline_m - truth.baseline_m) <= min(0.002 * truth.baseline_m, 3 * b_std)
