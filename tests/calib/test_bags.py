@@ -80,8 +80,10 @@ def test_bag_every_and_max_dt(synthetic_set: tuple[Path, StereoProfile], tmp_pat
     bag = write_bag(tmp_path / "cal.bag", synthetic_set[0], kind="ros1", pairs=12)
     args = ["calibrate", "--bag", str(bag), "--left-topic", "/stereo/left/image_raw", "--right-topic",
             "/stereo/right/image_raw", "--json", "--jobs", "1"]
-    assert main([*args, "-o", str(tmp_path / "a.yaml"), "--every", "2"]) == 0
+    assert main([*args, "-o", str(tmp_path / "a.yaml"), "--every", "2", "--report", str(tmp_path / "rep")]) == 0
     assert len(json.loads(capsys.readouterr().out)["views"]) == 6
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "rectified pair with horizontal lines" in page  # bag frames kept in memory for the report
     assert main([*args, "-o", str(tmp_path / "b.yaml"), "--max-dt", "0.001"]) == 2
     err = capsys.readouterr().err
     assert "within 0.001 s" in err and "--max-dt" in err

@@ -6,6 +6,8 @@ import json
 import shutil
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
 from s2r.cli import main
@@ -82,3 +84,38 @@ def test_prefixed_files_and_globs_pair_by_number(synthetic_set: tuple[Path, Ster
     assert code == code_b == 0
     assert a["quality"]["views_used"] == b["quality"]["views_used"] == 8 - len(a["dropped"])
     assert a["baseline_m"] == pytest.approx(b["baseline_m"])
+
+
+@pytest.mark.parametrize(("model", "terms", "name"), [("plumb_bob", 5, "plumb_bob"),
+                                                      ("rational", 8, "rational_polynomial")])
+def test_distortion_models(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path, model: str, terms: int,
+                           name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    folder, truth = synthetic_set
+    out = tmp_path / f"{model}.yaml"
+    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--distortion", model, "--jobs", "1"]) == 0
+    capsys.readouterr()
+    p = load_profile_file(out)
+    assert p.left.distortion.model == name and len(p.left.distortion.coefficients) == terms
+    assert p.provenance.calibration is not None and p.provenance.calibration.distortion_terms == model
+    assert abs(p.left.fx_px - truth.left.fx_px) < 0.005 * truth.left.fx_px
+    # rational terms trade off against each other, so compare the mapping, not k1: undistort a pixel grid
+    # over the central 80 % of the image with both models and compare (in pixels at the true focal length)
+    grid = np.stack(np.meshgrid(np.linspace(64, 576, 9), np.linspace(48, 432, 7)), -1).reshape(-1, 1, 2)
+    got = cv2.undistortPoints(grid, p.left.K, p.left.D).reshape(-1, 2)
+    want = cv2.undistortPoints(grid, truth.left.K, truth.left.D).reshape(-1, 2)
+    assert np.abs(got - want).max() * truth.left.fx_px < 1.0
+
+
+def test_max_error_drops_and_lists_views(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    folder, _ = synthetic_set
+    assert main(["calibrate", str(folder), "-o", str(tmp_path / "a.yaml"), "--json", "--jobs", "1"]) == 0
+    errors = sorted(v["stereo_px"] for v in json.loads(capsys.readouterr().out)["views"] if v["used"])
+    limit = errors[-4]  # the three worst views exceed it
+    assert main(["calibrate", str(folder), "-o", str(tmp_path / "b.yaml"), "--json", "--jobs", "1",
+                 "--max-error", f"{limit:.6f}"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    outliers = [d for d in figures["dropped"] if d["reason"].startswith("outlier")]
+    assert len(outliers) >= 3 and all(d["rms_px"] > 0 for d in outliers)
+    assert all(f"> {limit:.3f} px" in d["reason"] for d in outliers)
+    assert figures["quality"]["views_used"] == figures["quality"]["views_detected"] - len(outliers)
