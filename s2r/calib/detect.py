@@ -216,18 +216,26 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
     """Detect every item, in input order, over ``jobs`` worker processes.
 
     Items are consumed lazily and at most ``4 * jobs`` are in flight, so images are never all in memory.
-    Cache hits skip detection; new results are written to the cache as they arrive.
+    Cache hits skip detection; each new result is written to the cache the moment its worker finishes.
     """
     pending: deque[Detection | Future[Detection]] = deque()
     window = max(1, 4 * jobs)
     done = 0
     pool: ProcessPoolExecutor | None = None
 
+    def store(fut: Future[Detection]) -> None:
+        # runs as soon as a worker finishes (even ahead of earlier items), so an interrupt loses nothing done
+        if cache is not None and not fut.cancelled() and fut.exception() is None:
+            cache.put(fut.result(), pattern)
+
     def finish(entry: Detection | Future[Detection]) -> Detection:
         nonlocal done
-        det = entry if isinstance(entry, Detection) else entry.result()
-        if cache is not None and not det.cached:
-            cache.put(det, pattern)
+        if isinstance(entry, Detection):
+            det = entry
+            if cache is not None and not det.cached:
+                cache.put(det, pattern)
+        else:
+            det = entry.result()
         done += 1
         report(progress, done, total or done, "detecting corners")
         return det
@@ -241,7 +249,9 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
                 pending.append(_detect_item(item, pattern))
             else:
                 pool = pool or _executor(jobs)
-                pending.append(pool.submit(_detect_item, item, pattern))
+                future = pool.submit(_detect_item, item, pattern)
+                future.add_done_callback(store)
+                pending.append(future)
             while len(pending) >= window or (pending and isinstance(pending[0], Detection)):
                 yield finish(pending.popleft())
         while pending:
