@@ -101,7 +101,7 @@ def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), 
     if not ok:
         raise no_board_error(sum(d.status != "unreadable" for d in dets), pattern)
     if len(ok) < MIN_VIEWS:
-        raise too_few_error(len(ok), skipped, what="images")
+        raise too_few_error(len(ok), skipped, what="images", pattern=pattern)
     names = [d.name for _, d in ok]
     corners = [d.corners for _, d in ok if d.corners is not None]
     obj = board_object_points(pattern, square_m)

@@ -241,7 +241,7 @@ def calibrate_stereo_detections(
         raise no_board_error(readable, pattern)
     dropped = [*extra_dropped, *views.dropped]
     if len(views.names) < MIN_VIEWS:
-        raise too_few_error(len(views.names), dropped)
+        raise too_few_error(len(views.names), dropped, pattern=pattern)
     obj = board_object_points(pattern, square_m)
     selected = select_diverse(views.left, pattern, size)
     if len(selected) < len(views.names):

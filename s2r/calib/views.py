@@ -140,16 +140,22 @@ def no_board_error(n_images: int, pattern: tuple[int, int]) -> CalibrationError:
              f"squares is {cols}x{rows}), and --square is the square size in metres")
 
 
-def too_few_error(found: int, dropped: Sequence[DroppedView], *, what: str = "pairs") -> CalibrationError:
-    """The error for fewer usable views than :data:`MIN_VIEWS`, saying why the others failed."""
+def too_few_error(found: int, dropped: Sequence[DroppedView], *, what: str = "pairs",
+                  pattern: tuple[int, int] | None = None) -> CalibrationError:
+    """The error for fewer usable views than :data:`MIN_VIEWS`, saying why the others failed (and, when most
+    images showed no board, that ``--pattern`` may be wrong)."""
     reasons: dict[str, int] = {}
     for d in dropped:
         key = d.reason.split(":")[0]
         reasons[key] = reasons.get(key, 0) + 1
     why = ", ".join(f"{n} {k}" for k, n in sorted(reasons.items())) or "no other images"
-    return CalibrationError(
-        f"only {found} usable {what} found, at least {MIN_VIEWS} needed; skipped images: {why}",
-        hint="record more views with the whole board visible in both cameras")
+    hint = "record more views with the whole board visible in both cameras"
+    if pattern is not None and 2 * reasons.get("no board", 0) > len(dropped):
+        hint += (f"; if the board is in most images, check --pattern: it counts INNER corners "
+                 f"(a board of {pattern[0] + 1}x{pattern[1] + 1} squares is {pattern[0]}x{pattern[1]})")
+    noun = what if found != 1 else what.rstrip("s")
+    return CalibrationError(f"only {found} usable {noun} found, at least {MIN_VIEWS} needed; skipped images: {why}",
+                            hint=hint)
 
 
 def _view_features(corners: Corners, pattern: tuple[int, int], size: tuple[int, int]) -> NDArray[np.float64]:
