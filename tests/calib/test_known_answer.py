@@ -52,3 +52,12 @@ def test_pybullet_rendered_boards_recover_the_rig(tmp_path: Path) -> None:
     b_std = p.extrinsics.baseline_std_m
     assert b_std is not None
     assert abs(p.baseline_m - truth.baseline_m) <= min(0.002 * truth.baseline_m, 3 * b_std)
+
+
+def test_progress_is_reported_per_image(small_set: Path) -> None:
+    calls: list[tuple[int, int, str]] = []
+    pairs = find_stereo_pairs(small_set)
+    calibrate_stereo(pairs.left, pairs.right, jobs=1, progress=lambda d, t, label: calls.append((d, t, label)))
+    detecting = [c for c in calls if c[2] == "detecting corners"]
+    assert [c[0] for c in detecting] == list(range(1, 17)) and {c[1] for c in detecting} == {16}
+    assert calls[-1] == (1, 1, "solving")
