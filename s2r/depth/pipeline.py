@@ -9,6 +9,7 @@ The same code runs on any profile: ``StereoPipeline()`` uses the profile named b
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -219,6 +220,16 @@ def _scaled_profile(profile: StereoProfile, size: tuple[int, int]) -> StereoProf
 
 _POOL: list[ThreadPoolExecutor] = []
 _POOL_LOCK = threading.Lock()
+
+
+def _forget_pool_after_fork() -> None:
+    # A forked child inherits the pool object but not its threads: submitting to it would wait forever.
+    global _POOL_LOCK
+    _POOL.clear()
+    _POOL_LOCK = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_forget_pool_after_fork)
 
 
 def _right_pool() -> ThreadPoolExecutor:

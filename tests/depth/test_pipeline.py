@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import threading
+from typing import Any
 
 import cv2
 import numpy as np
@@ -219,3 +220,32 @@ def test_resize_scales_a_fixed_disparity_range(pair: SynthPair) -> None:
     assert pipe.config.num_disparities == 112
     pipe.compute(pair.left, pair.right)
     assert pipe.geometry_for((320, 240)).config.num_disparities == 64  # 112 / 2 = 56, up to 16
+
+
+
+def _compute_in_child(rig: StereoProfile, left: np.ndarray, right: np.ndarray, out: Any) -> None:
+    result = StereoPipeline(rig, preset="profile", postprocess=("lr-check",)).compute(left, right)
+    out.put(int(result.valid.sum()))
+
+
+def test_lr_check_works_in_a_forked_child_after_use_in_the_parent(pair: SynthPair, small_rig: StereoProfile) -> None:
+    # The lr-check thread pool is process-global; a forked child must not inherit the parent's dead pool
+    # (this hung `s2r validate` when its process pool forked after an earlier pipeline had run).
+    import multiprocessing
+    import queue
+
+    pipe = StereoPipeline(small_rig, preset="profile", postprocess=("lr-check",))
+    in_parent = int(pipe.compute(pair.left, pair.right).valid.sum())
+    context = multiprocessing.get_context("fork")
+    out = context.Queue()
+    child = context.Process(target=_compute_in_child, args=(small_rig, pair.left, pair.right, out))
+    child.start()
+    try:
+        in_child = out.get(timeout=60)
+    except queue.Empty:
+        pytest.fail("the depth pipeline hung in a forked child process")
+    finally:
+        child.join(timeout=5)
+        if child.is_alive():
+            child.kill()
+    assert in_child == in_parent > 0
