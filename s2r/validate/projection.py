@@ -15,13 +15,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.profile import Camera, StereoProfile
+from s2r.render.distortion import project_points, undistort_pixels
 
-__all__ = ["ProjectionDiff", "project_points", "projection_difference", "unproject_pixels"]
+__all__ = ["ProjectionDiff", "projection_difference"]
 
 FloatArray = NDArray[np.float64]
 
@@ -66,28 +66,6 @@ class ProjectionDiff:
                 "shift_px": np.round(self.shift_px, 4).tolist()}
 
 
-def unproject_pixels(cam: Camera, pixels: FloatArray) -> FloatArray:
-    """Normalised image coordinates (x/z, y/z), shape (N, 2), of pixels (N, 2) after removing distortion."""
-    pts = np.ascontiguousarray(pixels, dtype=np.float64).reshape(-1, 1, 2)
-    if cam.distortion.model == "equidistant":
-        out = cv2.fisheye.undistortPoints(pts, cam.K, cam.D)
-    else:
-        out = cv2.undistortPoints(pts, cam.K, cam.D, None, None, None,
-                                  (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10))
-    return np.asarray(out, dtype=np.float64).reshape(-1, 2)
-
-
-def project_points(cam: Camera, points: FloatArray) -> FloatArray:
-    """Pixels (N, 2) of 3D points (N, 3) in the camera's optical frame (metres), distortion applied."""
-    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 1, 3)
-    zero = np.zeros(3)
-    if cam.distortion.model == "equidistant":
-        out, _ = cv2.fisheye.projectPoints(pts, zero, zero, cam.K, cam.D)
-    else:
-        out, _ = cv2.projectPoints(pts, zero, zero, cam.K, cam.D)
-    return np.asarray(out, dtype=np.float64).reshape(-1, 2)
-
-
 def _common(cam: Camera, size: tuple[int, int]) -> Camera:
     return cam if cam.image_size == size else cam.scaled(*size)
 
@@ -112,7 +90,7 @@ def projection_difference(sim: StereoProfile, real: StereoProfile, *, distance_m
     v = np.linspace(0.0, size[1] - 1.0, grid[0])
     uu, vv = np.meshgrid(u, v)
     pixels = np.stack([uu.ravel(), vv.ravel()], axis=1)
-    rays = unproject_pixels(real.left, pixels)
+    rays = undistort_pixels(real.left, pixels)
     points = np.concatenate([rays * distance_m, np.full((len(rays), 1), distance_m)], axis=1)
 
     sim_px = project_points(sim_left, points)

@@ -9,8 +9,9 @@ import pytest
 
 from s2r.profile import CameraUncertainty, Extrinsics, StereoProfile
 from s2r.registry import load_profile
+from s2r.render.distortion import project_points, undistort_pixels
 from s2r.validate.params import ParamRow, parameter_table
-from s2r.validate.projection import project_points, projection_difference, unproject_pixels
+from s2r.validate.projection import projection_difference
 from s2r.validate.tolerances import Tolerances
 from tests.conftest import make_rig
 
@@ -63,7 +64,7 @@ def test_rotation_difference_is_the_relative_angle() -> None:
 def test_unproject_project_round_trip_with_distortion() -> None:
     cam = make_rig(distortion=(-0.12, 0.05, 0.001, -0.001, 0.0)).left
     pixels = np.array([[0.0, 0.0], [319.5, 239.5], [600.0, 50.0], [100.0, 400.0]])
-    rays = unproject_pixels(cam, pixels)
+    rays = undistort_pixels(cam, pixels)
     back = project_points(cam, np.column_stack([rays * 2.0, np.full(4, 2.0)]))
     np.testing.assert_allclose(back, pixels, atol=1e-6)
 
