@@ -59,6 +59,9 @@ def detect_format(path: str | Path) -> Format:
     text = read_text(source)
     if _is_opencv(text):
         return "opencv"
+    if _is_robot_description(source, text):
+        raise FormatError("is a robot description (URDF / xacro / SDF), not a camera profile", path=source,
+                          hint=f"derive a profile first: s2r profile from-urdf {source} -o profile.yaml")
     if is_realsense_text(text):
         return "realsense"
     if "schema_version" in text:
@@ -74,6 +77,14 @@ def detect_format(path: str | Path) -> Format:
         return "ros"
     keys = ", ".join(sorted(str(k) for k in data)[:6])
     raise FormatError(f"unrecognised format (top-level keys: {keys}); {_EXPECTED}", path=source)
+
+
+def _is_robot_description(path: Path, text: str) -> bool:
+    """True for URDF, xacro and SDF files (by suffix, or by their root element)."""
+    if path.name.endswith((".urdf", ".xacro", ".sdf", ".world")):
+        return True
+    head = text.lstrip()[:400]
+    return head.startswith("<") and any(tag in head for tag in ("<robot", "<sdf", "<xacro:"))
 
 
 def _renamed(profile: StereoProfile, name: str | None) -> StereoProfile:

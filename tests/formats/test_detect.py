@@ -77,3 +77,13 @@ def test_registry_loads_any_single_file_format(written: dict[str, Path]) -> None
     assert s2r.load_profile(str(written["kalibr"])).baseline_m == pytest.approx(0.1)
     assert s2r.load_profile(written["ros_dir"]).image_size == (640, 480)
     assert s2r.load_profile("realsense_d435_848x480").provenance.origin == "nominal"
+
+
+def test_robot_descriptions_point_to_from_urdf(tmp_path: Path) -> None:
+    shipped = Path(__file__).resolve().parents[2] / "urdf" / "xbot_u_stereo.sdf"
+    renamed = tmp_path / "robot.txt"
+    renamed.write_text('<?xml version="1.0"?>\n<robot name="r"><link name="a"/></robot>\n')
+    for path in (shipped, renamed):
+        with pytest.raises(FormatError, match="robot description") as info:
+            detect_format(path)
+        assert "s2r profile from-urdf" in str(info.value) and str(path) in str(info.value)
