@@ -29,6 +29,12 @@ from s2r.rectification import stereo_rectification
 __all__ = ["calibration_sections", "write_calibration_report"]
 
 Image = NDArray[np.uint8]
+#: OpenCV's names of each model's distortion coefficients, in order.
+_DISTORTION_NAMES = {
+    "plumb_bob": ("k1", "k2", "p1", "p2", "k3"),
+    "rational_polynomial": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"),
+    "equidistant": ("k1", "k2", "k3", "k4"),
+}
 
 
 def _camera_rows(label: str, cam: Camera) -> list[list[Any]]:
@@ -38,9 +44,10 @@ def _camera_rows(label: str, cam: Camera) -> list[list[Any]]:
         sd = None if std is None else getattr(std, key)
         rows.append([f"{label} {key}", value, sd, None if sd is None else f"{100 * sd / value:.3f} %"])
     dstd = (std.distortion if std is not None else None) or ()
+    names = _DISTORTION_NAMES[cam.distortion.model]
     for i, coef in enumerate(cam.distortion.coefficients):
         sd = dstd[i] if i < len(dstd) else None
-        rows.append([f"{label} d{i}", coef, sd, ""])
+        rows.append([f"{label} {names[i]}", coef, sd, "fixed at 0" if coef == 0.0 and not sd else ""])
     return rows
 
 
