@@ -200,7 +200,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     report = paths.report.resolve() / "validation.html"
     print(f"Sim-vs-real report: {report}")
     if not args.quick:
-        print(f"Calibration report: {paths.report.resolve() / 'calibration'}")
+        print(f"Calibration report: {paths.report.resolve() / 'calibration' / 'index.html'}")
     print(f"Closed-loop report: {paths.report.resolve() / 'closed_loop' / 'validation.html'}")
     verdict = "the story ended as it should" if outcome.ok else f"UNEXPECTED exit codes: {outcome.codes}"
     print(f"Demo: {verdict}.")
