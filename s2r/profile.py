@@ -22,6 +22,7 @@ from s2r._version import __version__
 from s2r.geometry import ORTHONORMAL_TOL, check_rotation, rotation_angle_rad
 
 __all__ = [
+    "CENTRE_OFFSET_PX",
     "DEFAULT_SUBPIXEL_PX",
     "DISTORTION_COEFFICIENTS",
     "SCHEMA_VERSION",
@@ -44,6 +45,11 @@ SCHEMA_VERSION: Literal[1] = 1
 DEFAULT_SUBPIXEL_PX = 0.08
 #: Number of coefficients per distortion model, in OpenCV's order.
 DISTORTION_COEFFICIENTS: dict[str, int] = {"plumb_bob": 5, "rational_polynomial": 8, "equidistant": 4}
+
+#: Principal point a convention PUBLISHES for a centred render, minus the exact centre ((W - 1) / 2 in
+#: OpenCV's 0-based pixel-centre convention), pixels, in x and in y (REFERENCE.md): Gazebo classic
+#: publishes (W + 1) / 2, gz-sim W / 2.
+CENTRE_OFFSET_PX: dict[str, float] = {"gazebo-classic": 1.0, "gz-sim": 0.5, "exact": 0.0, "opencv": 0.0}
 
 DistortionModel = Literal["plumb_bob", "rational_polynomial", "equidistant"]
 Origin = Literal["sim", "real", "nominal"]
@@ -145,6 +151,10 @@ class Camera(_Model):
         """Vertical field of view (radians) between the outer pixel edges, as :attr:`hfov_rad`."""
         top_edge, bottom_edge = self.cy_px + 0.5, self.height_px - 0.5 - self.cy_px
         return math.atan(top_edge / self.fy_px) + math.atan(bottom_edge / self.fy_px)
+
+    def shifted(self, dx_px: float, dy_px: float) -> Camera:
+        """This camera with its principal point moved by ``(dx_px, dy_px)`` pixels."""
+        return self.model_copy(update={"cx_px": self.cx_px + dx_px, "cy_px": self.cy_px + dy_px})
 
     def scaled(self, width_px: int, height_px: int) -> Camera:
         """This camera at another resolution, scaling K about pixel edges (``c' = s (c + 0.5) - 0.5``)."""
@@ -309,6 +319,26 @@ class StereoProfile(_Model):
                 f"{self.left.width_px} px wide image"
             )
         return self
+
+    @property
+    def published_offset_px(self) -> float:
+        """How far (pixels, in x and y) the principal point this profile declares lies from the one its images
+        obey in OpenCV's convention: 1 for gazebo-classic, 0.5 for gz-sim, 0 otherwise."""
+        return CENTRE_OFFSET_PX.get(self.provenance.convention, 0.0)
+
+    def in_opencv_pixels(self) -> StereoProfile:
+        """The camera geometry its images actually have, in OpenCV's 0-based pixel-centre convention.
+
+        A sim profile keeps what its simulator publishes (a gazebo-classic camera_info says cx = (W + 1) / 2
+        for an image centred at (W - 1) / 2); this subtracts :attr:`published_offset_px` from both principal
+        points and labels the result ``opencv``. Profiles already in OpenCV pixels come back unchanged.
+        """
+        offset = self.published_offset_px
+        if offset == 0.0:
+            return self
+        provenance = self.provenance.model_copy(update={"convention": "opencv"})
+        return self.model_copy(update={"left": self.left.shifted(-offset, -offset),
+                                       "right": self.right.shifted(-offset, -offset), "provenance": provenance})
 
     @property
     def R(self) -> NDArray[np.float64]:

@@ -28,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from s2r.errors import SourceError
+from s2r.profile import CENTRE_OFFSET_PX
 from s2r.sources.description import FloatArray, LensIntrinsics
 
 __all__ = [
@@ -44,8 +45,7 @@ __all__ = [
 ]
 
 CONVENTIONS = ("gazebo-classic", "gz-sim", "exact")
-#: Published principal point of a centred render minus the exact centre ((W - 1) / 2), pixels.
-CENTRE_OFFSET_PX: dict[str, float] = {"gazebo-classic": 1.0, "gz-sim": 0.5, "exact": 0.0, "opencv": 0.0}
+# CENTRE_OFFSET_PX (published principal point minus the exact centre) lives in s2r.profile, re-exported here.
 
 
 class Intrinsics(NamedTuple):

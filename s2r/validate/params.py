@@ -95,8 +95,9 @@ def _size_row(sim: StereoProfile, real: StereoProfile, tol: Tolerances) -> Param
 def parameter_table(sim: StereoProfile, real: StereoProfile, tol: Tolerances) -> list[ParamRow]:
     """Every compared parameter: size, intrinsics and distortion of both cameras, FOV, baseline, rotation.
 
-    Intrinsics are compared as declared (at each profile's own resolution); the projection difference
-    (:mod:`s2r.validate.projection`) compares them after scaling to a common resolution.
+    Intrinsics are compared at each profile's own resolution, in the pixel convention the profiles carry
+    (``validate`` first converts both to OpenCV pixels with :meth:`StereoProfile.in_opencv_pixels`); the
+    projection difference (:mod:`s2r.validate.projection`) compares them after scaling to a common resolution.
     """
     rows = [_size_row(sim, real, tol)]
     rows += _camera_rows("left", sim.left, real.left, tol)

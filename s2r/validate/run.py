@@ -109,6 +109,20 @@ def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[f
             "--preset, or pass --distances inside that range")
 
 
+def convention_notes(sim: StereoProfile, real: StereoProfile) -> list[str]:
+    """One note per profile whose declared principal point is offset from its images' centre (pixels)."""
+    notes = []
+    for role, profile in (("sim", sim), ("real", real)):
+        offset = profile.published_offset_px
+        if offset:
+            notes.append(
+                f"{role} profile {profile.name} follows the {profile.provenance.convention} convention: it "
+                f"declares its principal point {offset:g} px right of and below the centre its images obey; "
+                f"parameters and projections below compare the images' geometry (OpenCV 0-based pixels), and "
+                f"code that rectifies those images with the declared camera_info is {offset:g} px off")
+    return notes
+
+
 def _gazebo_xml(real: StereoProfile) -> str | None:
     try:
         from s2r.sources.gazebo_export import export_gazebo
@@ -126,11 +140,10 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
         result.resolution[role] = depth_resolution(profile, RESOLUTION_DISTANCES_M)
     if real is None:
         return
-    conventions = (sim.provenance.convention, real.provenance.convention)
-    if conventions[0] != conventions[1]:
-        result.notes.append(
-            f"pixel conventions differ (sim {conventions[0]}, real {conventions[1]}): compared as declared; a "
-            "gazebo-classic camera publishes its principal point 1 px right of and below the rendered centre")
+    result.notes += convention_notes(sim, real)
+    # Compare the geometry the images obey: a sim profile declares what its simulator publishes, which
+    # (gazebo-classic, gz-sim) sits a fixed offset from the centre its images really have.
+    sim, real = sim.in_opencv_pixels(), real.in_opencv_pixels()
     result.params = parameter_table(sim, real, tol)
     result.projection = projection_difference(sim, real, distance_m=tol.working_distance_m)
     result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
