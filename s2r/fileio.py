@@ -6,6 +6,9 @@ import hashlib
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 from s2r.errors import OutputExistsError, S2RError
 
@@ -13,7 +16,9 @@ __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "check_output_free",
+    "parse_yaml",
     "prepare_output_dir",
+    "read_text_file",
     "sha256_file",
 ]
 
@@ -85,3 +90,30 @@ def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
         while chunk := handle.read(chunk_bytes):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str:
+    """A file's UTF-8 text; ``error`` (one line naming the file) when it is missing or unreadable."""
+    source = Path(path)
+    try:
+        return source.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error("file not found", path=source, hint="check the path") from None
+    except IsADirectoryError:
+        raise error("is a folder, not a file", path=source, hint="pass the file inside it") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
+
+
+def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RError] = S2RError) -> Any:
+    """Parse YAML text with the safe loader; ``error`` naming the file and line when it is malformed."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else None
+        problem = getattr(exc, "problem", None) or "not valid YAML"
+        raise error(f"malformed YAML: {problem}", path=path, field=where) from None
+    except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
+        # the safe loader's int/float/timestamp constructors raise plain errors on odd scalars (2026-13-45)
+        raise error(f"malformed YAML: {exc}", path=path) from None

@@ -12,12 +12,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 from pydantic import BaseModel, ValidationError
 
 from s2r.errors import FormatError
-from s2r.fileio import sha256_file
+from s2r.fileio import parse_yaml, read_text_file, sha256_file
 from s2r.formats.s2r_yaml import validation_message
 from s2r.geometry import ORTHONORMAL_TOL
 from s2r.profile import (
@@ -50,15 +49,7 @@ FloatArray = NDArray[np.float64]
 
 def read_text(path: str | Path) -> str:
     """The file's UTF-8 text; FormatError naming the file when it is missing or unreadable."""
-    source = Path(path)
-    try:
-        return source.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FormatError("file not found", path=source, hint="check the path") from None
-    except IsADirectoryError:
-        raise FormatError("is a folder, not a file", path=source, hint="pass the file inside it") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FormatError(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
+    return read_text_file(path, error=FormatError)
 
 
 def first_document(text: str) -> str:
@@ -77,16 +68,7 @@ def first_document(text: str) -> str:
 
 def read_yaml(text: str, path: str | Path) -> Any:
     """Parse YAML text (safe loader); FormatError with the line number when malformed."""
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark is not None else None
-        problem = getattr(exc, "problem", None) or "not valid YAML"
-        raise FormatError(f"malformed YAML: {problem}", path=path, field=where) from None
-    except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
-        # the safe loader's timestamp/int constructors can raise plain Python errors on odd scalars
-        raise FormatError(f"malformed YAML: {exc}", path=path) from None
+    return parse_yaml(text, path=path, error=FormatError)
 
 
 def require(mapping: Any, key: str, path: str | Path, *, prefix: str = "") -> Any:

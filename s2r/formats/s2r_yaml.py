@@ -14,7 +14,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from s2r.errors import ProfileError
-from s2r.fileio import atomic_write_text
+from s2r.fileio import atomic_write_text, parse_yaml, read_text_file
 from s2r.profile import MonoProfile, StereoProfile
 
 __all__ = [
@@ -64,22 +64,7 @@ def validation_message(exc: ValidationError) -> tuple[str, str]:
 def read_yaml_mapping(path: str | Path) -> dict[str, Any]:
     """Read a YAML file that must hold a mapping; raise ProfileError naming the file otherwise."""
     source = Path(path)
-    try:
-        text = source.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ProfileError("file not found", path=source, hint="check the path") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProfileError(f"cannot read: {exc}", path=source) from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark is not None else None
-        problem = getattr(exc, "problem", None) or "not valid YAML"
-        raise ProfileError(f"malformed YAML: {problem}", path=source, field=where) from None
-    except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
-        # the safe loader's int/float/timestamp constructors raise plain errors on odd scalars (2026-13-45)
-        raise ProfileError(f"malformed YAML: {exc}", path=source) from None
+    data = parse_yaml(read_text_file(source, error=ProfileError), path=source, error=ProfileError)
     if not isinstance(data, dict):
         raise ProfileError("expected a YAML mapping at the top level", path=source, hint="is this a profile file?")
     return data

@@ -13,9 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from s2r.errors import ValidateError
+from s2r.fileio import parse_yaml, read_text_file
 
 __all__ = ["Tolerances", "load_tolerances"]
 
@@ -77,16 +76,7 @@ class Tolerances:
 
 
 def _read_mapping(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ValidateError("tolerances file not found", path=path, hint="check the path") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValidateError(f"cannot read tolerances file: {exc}", path=path) from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError:
-        raise ValidateError("malformed YAML", path=path, hint="write one 'key: number' per line") from None
+    data = parse_yaml(read_text_file(path, error=ValidateError), path=path, error=ValidateError)
     if data is None:
         return {}
     if not isinstance(data, dict):

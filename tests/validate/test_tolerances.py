@@ -59,3 +59,12 @@ def test_not_a_mapping_and_missing_file(tmp_path: Path) -> None:
     path.write_text("a: [1\n")
     with pytest.raises(ValidateError, match="malformed YAML"):
         load_tolerances(path)
+
+
+@pytest.mark.parametrize("body", ["focal_rel: 2026-13-21\n", "focal_rel: [1,\n", "focal_rel: 0.02\n\tsigma: 3\n"])
+def test_malformed_yaml_is_one_line_not_a_traceback(tmp_path: Path, body: str) -> None:
+    path = tmp_path / "tol.yaml"
+    path.write_text(body)
+    with pytest.raises(ValidateError, match="malformed YAML") as info:
+        load_tolerances(path)
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
