@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.errors import SourceError
+from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
 from s2r.sources.kinematics import KinematicTree
@@ -41,12 +42,7 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         SourceError: missing file, xacro failure, malformed XML, unknown root element, missing links.
     """
     source = Path(path)
-    if not source.is_file():
-        raise SourceError("file not found", path=source, hint="check the path")
-    try:
-        text = source.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SourceError(f"cannot read: {exc}", path=source) from None
+    text = read_text_file(source, error=SourceError)
     expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if is_xacro(source) else text
     doc = parse_xml(expanded, source)
     if doc.root.tag == "robot":

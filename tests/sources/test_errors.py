@@ -97,6 +97,7 @@ def test_unresolved_find(tmp_path: Path, capsys: pytest.CaptureFixture[str], mon
 def test_missing_file_and_bad_xacro_argument(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     err = _cli_error(capsys, ["lint", str(tmp_path / "none.urdf")])
     assert "none.urdf: file not found" in err
+    assert f"{tmp_path}: is a folder, not a file" in _cli_error(capsys, ["lint", str(tmp_path)])
     path = write(tmp_path, "two.urdf", two_camera_urdf())
     err = _cli_error(capsys, ["lint", str(path), "baseline=0.1"])
     assert "NAME:=VALUE" in err and "name:=value" in err
