@@ -4,13 +4,52 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 
-__all__ = ["ProgressBar", "add_force", "add_json", "print_json", "to_jsonable"]
+__all__ = ["ProgressBar", "add_force", "add_json", "argparse_type", "parse_distances", "parse_pattern", "print_json",
+           "to_jsonable"]
+
+T = TypeVar("T")
+
+
+def parse_pattern(text: str) -> tuple[int, int]:
+    """``"9x6"`` -> ``(9, 6)`` chessboard INNER corners (columns x rows); ValueError saying what is wrong."""
+    match = re.fullmatch(r"\s*(\d+)\s*[xX*,]\s*(\d+)\s*", text)
+    if not match or min(int(match.group(1)), int(match.group(2))) < 2:
+        raise ValueError(f"cannot read pattern {text!r}: give INNER corners as COLSxROWS, e.g. 9x6 for a board "
+                         "of 10x7 squares")
+    return int(match.group(1)), int(match.group(2))
+
+
+def parse_distances(text: str) -> tuple[float, ...]:
+    """``"0.5,1,2"`` -> distances in metres, each finite and positive; ValueError saying what is wrong."""
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise ValueError(f"not a list of numbers: {text!r} (write metres separated by commas, e.g. 0.5,1,2,3)"
+                         ) from None
+    if not values or not all(math.isfinite(v) and v > 0 for v in values):
+        raise ValueError(f"distances must be positive metres, got {text!r} (e.g. 0.5,1,2,3)")
+    return values
+
+
+def argparse_type(parse: Callable[[str], T]) -> Callable[[str], T]:
+    """Wrap a parser raising ValueError as an argparse ``type=`` that keeps its message in the usage error."""
+
+    def convert(text: str) -> T:
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return convert
 
 
 def to_jsonable(value: Any) -> Any:

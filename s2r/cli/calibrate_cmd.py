@@ -7,23 +7,14 @@ import re
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.errors import CalibrationError
 from s2r.fileio import check_output_free, prepare_output_dir
 from s2r.formats.s2r_yaml import dump_profile
 
-__all__ = ["parse_pattern", "register"]
+__all__ = ["register"]
 
 EXIT_OK = 0
-
-
-def parse_pattern(text: str) -> tuple[int, int]:
-    """``"9x6"`` -> ``(9, 6)`` inner corners (columns x rows)."""
-    match = re.fullmatch(r"\s*(\d+)\s*[xX*,]\s*(\d+)\s*", text)
-    if not match or min(int(match.group(1)), int(match.group(2))) < 2:
-        raise CalibrationError(f"cannot read pattern {text!r}", field="--pattern",
-                               hint="give INNER corners as COLSxROWS, e.g. 9x6 for a board of 10x7 squares")
-    return int(match.group(1)), int(match.group(2))
 
 
 def register(sub: Any) -> None:
@@ -60,7 +51,10 @@ def register(sub: Any) -> None:
 
 
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
-    pattern = parse_pattern(args.pattern)
+    try:
+        pattern = parse_pattern(args.pattern)
+    except ValueError as exc:
+        raise CalibrationError(str(exc), field="--pattern") from None
     if not args.square > 0:
         raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
                                hint="give the square edge in metres, e.g. 0.025")

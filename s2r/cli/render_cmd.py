@@ -3,35 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import math
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_distances, parse_pattern, print_json
 from s2r.registry import load_profile
 
 __all__ = ["SCENE_CHOICES", "register"]
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
 SCENE_CHOICES = ("planes", "slanted", "room")
-
-
-def _pattern(text: str) -> tuple[int, int]:
-    """argparse type for ``COLSxROWS`` inner corners."""
-    cols, sep, rows = text.lower().partition("x")
-    if not sep or not cols.isdigit() or not rows.isdigit() or int(cols) < 2 or int(rows) < 2:
-        raise argparse.ArgumentTypeError(f"expected inner corners COLSxROWS such as 9x6, got {text!r}")
-    return int(cols), int(rows)
-
-
-def _distances(text: str) -> list[float]:
-    """argparse type for comma-separated distances in metres."""
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected distances in metres such as 0.5,1,2, got {text!r}") from None
-    if not values or not all(math.isfinite(v) and v > 0 for v in values):
-        raise argparse.ArgumentTypeError(f"expected positive distances in metres such as 0.5,1,2, got {text!r}")
-    return values
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -58,7 +38,7 @@ def register(sub: Any) -> None:
                                      description="Writes DIR/left/NN.png, DIR/right/NN.png and DIR/truth.yaml.")
     _common(p_boards)
     p_boards.add_argument("--views", type=int, default=20, metavar="N", help="number of views (default 20)")
-    p_boards.add_argument("--pattern", type=_pattern, default=(9, 6), metavar="COLSxROWS",
+    p_boards.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6), metavar="COLSxROWS",
                           help="inner corners (default 9x6)")
     p_boards.add_argument("--square", type=float, default=0.025, metavar="M", help="square size in metres")
     p_boards.set_defaults(func=_cmd_boards)
@@ -69,7 +49,8 @@ def register(sub: Any) -> None:
         "disparity/NN.npy (float32 px, rectified left image), depth_rect/NN.npy and scene.yaml.")
     _common(p_scene)
     p_scene.add_argument("--scene", choices=SCENE_CHOICES, default="planes", help="scene type (default planes)")
-    p_scene.add_argument("--distances", type=_distances, default=[0.5, 1.0, 2.0, 3.0, 5.0], metavar="D1,D2,...",
+    p_scene.add_argument("--distances", type=argparse_type(parse_distances), default=(0.5, 1.0, 2.0, 3.0, 5.0),
+                         metavar="D1,D2,...",
                          help="distances in metres (default 0.5,1,2,3,5)")
     p_scene.set_defaults(func=_cmd_scene)
 

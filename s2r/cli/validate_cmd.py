@@ -10,7 +10,7 @@ import dataclasses
 import sys
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.cli._common import ProgressBar, add_force, add_json, parse_distances, print_json
 from s2r.errors import ValidateError
 from s2r.fileio import prepare_output_dir
 from s2r.registry import load_profile
@@ -42,20 +42,6 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=_cmd_validate)
 
 
-def _distances(text: str | None) -> tuple[float, ...] | None:
-    if text is None:
-        return None
-    try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise ValidateError(f"not a list of numbers: {text!r}", field="--distances",
-                            hint="write metres separated by commas, e.g. 0.5,1,2,3") from None
-    if not values or any(not v > 0 for v in values):
-        raise ValidateError(f"distances must be positive metres, got {text!r}", field="--distances",
-                            hint="e.g. 0.5,1,2,3")
-    return values
-
-
 def _cmd_validate(args: argparse.Namespace) -> int:
     from s2r.validate.report import write_validation_report
     from s2r.validate.run import FULL, QUICK, validate
@@ -68,9 +54,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     sim = load_profile(args.sim)
     real = None if args.real is None else load_profile(args.real)
     settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
-    distances = _distances(args.distances)
-    if distances is not None:
-        settings = dataclasses.replace(settings, distances_m=distances)
+    if args.distances is not None:
+        try:
+            settings = dataclasses.replace(settings, distances_m=parse_distances(args.distances))
+        except ValueError as exc:
+            raise ValidateError(str(exc), field="--distances") from None
     if args.report:
         prepare_output_dir(args.report, force=args.force)  # fail before the work, not after
     quiet = args.quiet or args.json
