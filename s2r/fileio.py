@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import hashlib
+import io
 import os
 import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
     "atomic_write_bytes",
+    "atomic_write_npy",
     "atomic_write_text",
+    "check_output_dir",
     "check_output_free",
     "parse_yaml",
     "prepare_output_dir",
@@ -65,8 +69,8 @@ def atomic_write_text(path: str | Path, text: str, *, force: bool = False) -> Pa
     return atomic_write_bytes(path, text.encode("utf-8"), force=force)
 
 
-def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Create ``path`` as an output folder; refuse a non-empty existing folder unless ``force``."""
+def check_output_dir(path: str | Path, *, force: bool) -> Path:
+    """Refuse (creating nothing) a non-folder, or a folder that holds files unless ``force``; return the path."""
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise OutputExistsError("exists and is not a folder", path=out, hint="choose another output folder")
@@ -74,6 +78,12 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
         raise OutputExistsError(
             "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"
         )
+    return out
+
+
+def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
+    """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable."""
+    out = check_output_dir(path, force=force)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -81,6 +91,13 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
     if not os.access(out, os.W_OK):
         raise S2RError("folder is not writable", path=out, hint="choose a writable location")
     return out
+
+
+def atomic_write_npy(path: str | Path, array: Any, *, force: bool = False) -> Path:
+    """Write ``array`` as a ``.npy`` file (no pickles) through :func:`atomic_write_bytes`."""
+    buffer = io.BytesIO()
+    np.save(buffer, np.asarray(array), allow_pickle=False)
+    return atomic_write_bytes(path, buffer.getvalue(), force=force)
 
 
 def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:

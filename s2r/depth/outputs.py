@@ -12,7 +12,6 @@ File conventions:
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import cv2
@@ -21,7 +20,7 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
-from s2r.fileio import atomic_write_bytes
+from s2r.fileio import atomic_write_bytes, atomic_write_npy
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -90,9 +89,7 @@ def write_depth_png(path: str | Path, depth_m: NDArray[np.floating], *, force: b
 
 def write_disparity(path: str | Path, disparity: NDArray[np.floating], *, force: bool = False) -> Path:
     """Write the float32 disparity (pixels, NaN invalid) as a .npy file."""
-    buf = io.BytesIO()
-    np.save(buf, np.asarray(disparity, dtype=np.float32))
-    return atomic_write_bytes(path, buf.getvalue(), force=force)
+    return atomic_write_npy(path, np.asarray(disparity, dtype=np.float32), force=force)
 
 
 def write_ply(path: str | Path, points: NDArray[np.float32], colours: NDArray[np.uint8], *, force: bool = False

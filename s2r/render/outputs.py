@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 import re
 from collections.abc import Sequence
 from pathlib import Path
@@ -11,10 +10,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.errors import OutputExistsError, RenderError
-from s2r.fileio import atomic_write_bytes, prepare_output_dir
+from s2r.errors import RenderError
+from s2r.fileio import atomic_write_bytes, check_output_dir, prepare_output_dir
 
-__all__ = ["check_output_dir", "clear_numbered", "encode_npy", "encode_png", "numbered_names"]
+__all__ = ["check_output_dir", "clear_numbered", "encode_png", "numbered_names"]
 
 _NUMBERED = re.compile(r"^\d+\.(png|npy)$")
 
@@ -23,18 +22,6 @@ def numbered_names(count: int) -> list[str]:
     """``["00", "01", ...]``: zero-padded to at least two digits, enough for ``count`` items."""
     width = max(2, len(str(max(count - 1, 0))))
     return [f"{k:0{width}d}" for k in range(count)]
-
-
-def check_output_dir(out_dir: str | Path, *, force: bool) -> Path:
-    """Raise OutputExistsError (creating nothing) if ``out_dir`` holds files and ``force`` is false."""
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError("exists and is not a folder", path=out, hint="choose another output folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise OutputExistsError(
-            "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"
-        )
-    return out
 
 
 def clear_numbered(out_dir: str | Path, subdirs: Sequence[str], *, force: bool) -> Path:
@@ -61,10 +48,3 @@ def encode_png(path: Path, bgr: NDArray[np.uint8]) -> Path:
     if not ok:
         raise RenderError("cannot encode PNG", path=path)
     return atomic_write_bytes(path, buf.tobytes(), force=True)
-
-
-def encode_npy(path: Path, array: NDArray[np.generic]) -> Path:
-    """Write an array as ``.npy``, atomically."""
-    buf = io.BytesIO()
-    np.save(buf, array, allow_pickle=False)
-    return atomic_write_bytes(path, buf.getvalue(), force=True)

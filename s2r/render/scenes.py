@@ -21,12 +21,12 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from s2r.fileio import atomic_write_text
+from s2r.fileio import atomic_write_npy, atomic_write_text
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
 from s2r.render.layouts import check_distances, scene_layouts
-from s2r.render.outputs import clear_numbered, encode_npy, encode_png, numbered_names
+from s2r.render.outputs import clear_numbered, encode_png, numbered_names
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import clip_planes
 from s2r.render.rig import StereoJob, check_render_options, finish_image, render_stereo, stereo_setups
@@ -141,9 +141,8 @@ def write_scene(frames: Sequence[SceneFrame], out_dir: str | Path, *, force: boo
     for f in frames:
         encode_png(out / "left" / f"{f.name}.png", f.left)
         encode_png(out / "right" / f"{f.name}.png", f.right)
-        encode_npy(out / "depth" / f"{f.name}.npy", np.asarray(f.depth_m, dtype=np.float32))
-        encode_npy(out / "disparity" / f"{f.name}.npy", np.asarray(f.disparity_rect_px, dtype=np.float32))
-        encode_npy(out / "depth_rect" / f"{f.name}.npy", np.asarray(f.depth_rect_m, dtype=np.float32))
+        for folder, array in (("depth", f.depth_m), ("disparity", f.disparity_rect_px), ("depth_rect", f.depth_rect_m)):
+            atomic_write_npy(out / folder / f"{f.name}.npy", np.asarray(array, dtype=np.float32), force=True)
         entries.append({"name": f.name, "left": f"left/{f.name}.png", "right": f"right/{f.name}.png",
                         "depth": f"depth/{f.name}.npy", "disparity": f"disparity/{f.name}.npy",
                         "depth_rect": f"depth_rect/{f.name}.npy", "description": f.description})
