@@ -10,6 +10,7 @@ import stat
 import tempfile
 from pathlib import Path
 from typing import Any
+from xml.parsers import expat
 
 import numpy as np
 import yaml
@@ -17,6 +18,7 @@ import yaml
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
+    "StrictSafeLoader",
     "atomic_write_bytes",
     "atomic_write_npy",
     "atomic_write_text",
@@ -25,6 +27,8 @@ __all__ = [
     "parse_yaml",
     "prepare_output_dir",
     "read_text_file",
+    "run_xml_parser",
+    "safe_xml_parser",
     "sha256_file",
 ]
 
@@ -211,10 +215,39 @@ def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str
         raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
 
 
-def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RError] = S2RError) -> Any:
-    """Parse YAML text with the safe loader; ``error`` naming the file and line when it is malformed."""
+class StrictSafeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, stricter: a key repeated in one mapping is an error (naming the key and its line,
+    instead of the last one silently winning), and the object-building tags ``!!binary !!set !!omap !!pairs
+    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        """The mapping of ``node``; ConstructorError on a duplicate key."""
+        seen: set[Any] = set()
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge" or not isinstance(key_node, yaml.ScalarNode):
+                continue
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (each key may appear once)", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)  # type: ignore[no-any-return]
+
+    def refuse_tag(self, node: yaml.Node) -> Any:
+        """Constructor for tags that build objects: always an error."""
+        raise yaml.constructor.ConstructorError(None, None, f"tag {node.tag!r} is not allowed", node.start_mark)
+
+
+for _tag in ("binary", "set", "omap", "pairs"):
+    StrictSafeLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", StrictSafeLoader.refuse_tag)
+
+
+def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RError] = S2RError,
+               loader: type[StrictSafeLoader] = StrictSafeLoader) -> Any:
+    """Parse YAML text with :class:`StrictSafeLoader` (or a subclass); ``error`` naming the file and line when
+    it is malformed, repeats a key or uses a refused tag."""
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=loader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else None
@@ -223,3 +256,35 @@ def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RErro
     except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
         # the safe loader's int/float/timestamp constructors raise plain errors on odd scalars (2026-13-45)
         raise error(f"malformed YAML: {exc}", path=path) from None
+
+
+class _RefusedXml(Exception):
+    """Raised from inside expat when a document declares a DOCTYPE or entities."""
+
+
+def _refuse_doctype(*_: Any) -> None:
+    raise _RefusedXml("DOCTYPE")
+
+
+def safe_xml_parser() -> Any:
+    """An expat parser that refuses any ``<!DOCTYPE>`` (so no DTD, no entity declarations, no entity
+    amplification, no external entities). Parse with :func:`run_xml_parser` to get one-line errors."""
+    parser = expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = _refuse_doctype
+    parser.EntityDeclHandler = _refuse_doctype
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    return parser
+
+
+def run_xml_parser(parser: Any, text: str, *, path: str | Path, error: type[S2RError] = S2RError) -> None:
+    """Feed ``text`` to a :func:`safe_xml_parser`; ``error`` (one line, file and line) when it is refused or
+    malformed."""
+    try:
+        parser.Parse(text, True)
+    except _RefusedXml:
+        raise error("XML with a <!DOCTYPE> (DTD or entity declarations) is refused", path=path,
+                    field=f"line {parser.CurrentLineNumber}",
+                    hint="remove the <!DOCTYPE ...> block; these files never need one") from None
+    except expat.ExpatError as exc:
+        raise error(f"malformed XML: {expat.ErrorString(exc.code)} at column {exc.offset + 1}", path=path,
+                    field=f"line {exc.lineno}", hint="fix the XML syntax there (unclosed or mismatched tag?)") from None

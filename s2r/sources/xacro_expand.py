@@ -142,7 +142,7 @@ def expand_xacro(
                               field=f"$(find {cause.package})", hint=_FIND_HINT) from None
         if isinstance(cause, UnsafeXacro):
             raise SourceError(f"refused: {cause}", path=path, field="xacro",
-                              hint="s2r evaluates only plain arithmetic in xacro; see README 'xacro safety'") from None
+                              hint="README 'Hostile input' lists what a xacro may do") from None
         raise SourceError(f"xacro expansion failed: {_safe_detail(exc, cause)}", path=path, field="xacro",
                           hint="fix the xacro file or pass the missing name:=value arguments") from None
     return str(doc.toprettyxml(indent="  "))

@@ -19,6 +19,7 @@ a profile, so while s2r expands a xacro (:func:`sandbox`):
 - ``xacro.load_yaml`` and ``<xacro:include>`` read only files under the description's folder (or its ROS
   package, the nearest folder above holding a ``package.xml``) and the package folders (``--package-path``,
   ``ROS_PACKAGE_PATH``);
+- a file (the description or an include) holding ``<!DOCTYPE`` is refused: no entity expansion;
 - ``$(env NAME)`` and ``$(optenv NAME default)`` never read the environment: ``env`` is refused (pass the
   value as ``NAME:=value``), ``optenv`` takes its default. A profile thus depends on the files and the
   arguments given, not on the machine's environment, and no environment value reaches an output.
@@ -34,7 +35,7 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["UnsafeXacro", "check_expression", "sandbox"]
+__all__ = ["UnsafeXacro", "check_expression", "check_no_doctype", "sandbox"]
 
 _MATH = frozenset(k for k in vars(math) if not k.startswith("_"))
 _PLAIN_CALLS = frozenset({"abs", "len", "min", "max", "round", "sum", "int", "float", "str", "bool", "list",
@@ -150,6 +151,17 @@ def _checked_file(filename: str, roots: Sequence[Path], what: str) -> str:
     return filename
 
 
+def check_no_doctype(filename: str | Path) -> None:
+    """Refuse a xacro file that declares a DOCTYPE (entities: "billion laughs" amplification, external files)."""
+    try:
+        head = Path(filename).read_bytes()
+    except OSError:
+        return  # xacro reports the missing or unreadable file itself
+    if b"<!DOCTYPE" in head or b"<!ENTITY" in head:
+        raise UnsafeXacro(f"{Path(filename).name}: XML with a <!DOCTYPE> (DTD or entity declarations) is refused "
+                          "(remove the <!DOCTYPE ...> block)")
+
+
 @contextmanager
 def _patched(obj: Any, name: str, value: Any) -> Iterator[None]:
     saved = obj[name] if isinstance(obj, dict) else getattr(obj, name)
@@ -182,6 +194,7 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
     from xacro import substitution_args as subst
 
     roots = allowed_roots(description, package_paths)
+    check_no_doctype(description)
     safe_eval: Callable[..., Any] = xacro.safe_eval
     subst_eval: Callable[..., Any] = subst._eval
     load_yaml: Callable[..., Any] = xacro.load_yaml
@@ -201,7 +214,8 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
 
     def checked_includes(spec: Any, symbols: Any) -> Iterator[str]:
         for name in include_files(spec, symbols):
-            yield _checked_file(name, roots, "include of")
+            check_no_doctype(_checked_file(name, roots, "include of"))
+            yield name
 
     symbols = xacro._global_symbols
     with ExitStack() as stack:

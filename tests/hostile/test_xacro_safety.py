@@ -155,3 +155,21 @@ def test_ordinary_expressions_are_allowed(expr: str) -> None:
 def test_unsafe_expressions_are_refused(expr: str) -> None:
     with pytest.raises(UnsafeXacro):
         check_expression(expr)
+
+
+LAUGHS = """<?xml version="1.0"?>
+<!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">
+<!ENTITY lol3 "&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;">]>
+<robot name="&lol3;" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="a"/></robot>
+"""
+
+
+@pytest.mark.parametrize("name", ["laughs.urdf", "laughs.sdf", "laughs.urdf.xacro"])
+def test_entity_declarations_are_refused_not_hinted_as_unclosed_tag(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str],
+                                                                    name: str) -> None:
+    path = tmp_path / name
+    path.write_text(LAUGHS, encoding="utf-8")
+    code, text = _run(["lint", str(path)], capsys)
+    assert code == 2 and "DOCTYPE" in text and "unclosed" not in text and "lollol" not in text
+    assert text.count("\n") == 1
