@@ -137,15 +137,15 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
     def is_optical(camera: CameraSpec) -> bool:
         return camera.link_is_optical if optical is None else optical
 
-    left_cam = _camera(pair.left, convention, is_optical(pair.left))
-    right_cam = _camera(pair.right, convention, is_optical(pair.right))
-    extrinsics = _extrinsics(pair, source)
-    baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
-    simulation = _simulation(pair.left)
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
     notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
              f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
-    try:
+    try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
+        left_cam = _camera(pair.left, convention, is_optical(pair.left))
+        right_cam = _camera(pair.right, convention, is_optical(pair.right))
+        extrinsics = _extrinsics(pair, source)
+        baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
+        simulation = _simulation(pair.left)
         return StereoProfile(
             name=name or _default_name(source),
             description=f"{description.kind.upper()} stereo pair from {source.name} ({convention} convention)",
