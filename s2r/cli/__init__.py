@@ -14,6 +14,8 @@ import os
 import sys
 from collections.abc import Sequence
 
+from pydantic import ValidationError
+
 from s2r._version import __version__
 from s2r.cli import calibrate_cmd, depth_cmd, profile_cmd, render_cmd, sources_cmd, validate_cmd
 from s2r.errors import S2RError
@@ -81,6 +83,11 @@ def _report(exc: Exception) -> int:
     try:
         if isinstance(exc, S2RError):
             print(f"error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, ValidationError):  # a value from an input broke a bound of s2r.profile
+            first = exc.errors()[0] if exc.errors() else {"loc": (), "msg": str(exc)}
+            where = ".".join(str(p) for p in first["loc"]) or exc.title
+            print(f"error: {where}: {' '.join(str(first['msg']).split())}", file=sys.stderr)
             return EXIT_BAD_INPUT
         if isinstance(exc, OSError) and exc.filename is not None:  # a file the user named is unusable
             print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)

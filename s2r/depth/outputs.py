@@ -12,6 +12,7 @@ File conventions:
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import cv2
@@ -20,7 +21,7 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
-from s2r.fileio import atomic_write_bytes, atomic_write_npy
+from s2r.fileio import atomic_write_bytes, atomic_write_npy, native_stderr_captured
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -43,7 +44,11 @@ def read_image(path: str | Path) -> NDArray[np.uint8]:
     if not path.is_file():
         raise DepthError("image file not found", path=path, hint="check the path")
     data = np.fromfile(path, dtype=np.uint8)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    with native_stderr_captured() as decoder_notes:  # no bare libjpeg/libpng lines on stderr
+        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    if decoder_notes and image is not None:
+        logging.getLogger(__name__).warning("%s: the image decoder reported %r; the image may be damaged", path,
+                       "; ".join(decoder_notes)[:200])
     if image is None:
         raise DepthError("cannot read image (not an image file, or corrupt)", path=path,
                          hint="pass a PNG/JPEG/BMP/TIFF/PGM image")

@@ -159,7 +159,8 @@ def distortion_for(model: str, coeffs: Sequence[float], path: str | Path, field:
         raise FormatError(
             f"distortion model {model} needs {expected} coefficients, got {len(values)}", path=path, field=field
         )
-    return Distortion(model=model, coefficients=tuple(values))  # type: ignore[arg-type]
+    distortion: Distortion = _validated(Distortion, {"model": model, "coefficients": tuple(values)}, path, field)
+    return distortion
 
 
 def _validated(model: type[BaseModel], data: dict[str, Any], path: str | Path, field: str) -> Any:
