@@ -169,8 +169,8 @@ def rotation_as_printed(rot: FloatArray, path: str | Path, field: str, *, zero_i
         log.warning("%s: %s is all zeros; read as the identity (an unrectified camera)", path, field)
         return np.eye(3)
     err = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
-    if err <= ORTHONORMAL_TOL:
-        return check_rotation_field(rot, path, field)
+    if err <= ORTHONORMAL_TOL and abs(float(np.linalg.det(rot)) - 1.0) <= ORTHONORMAL_TOL:
+        return rot
     decimals = printed_decimals(rot)
     tol = max(ORTHONORMAL_TOL, 4.0 * 10.0 ** -decimals)
     if err > tol or float(np.linalg.det(rot)) <= 0:
