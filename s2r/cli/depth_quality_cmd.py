@@ -43,6 +43,7 @@ def register(sub: Any) -> None:
     parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
     parser.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
     parser.add_argument("--preset", default="profile", choices=PRESETS, help="matcher preset for stereo pairs")
+    parser.add_argument("--num-disparities", type=int, help="disparity range in px for stereo (multiple of 16)")
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), help="chessboard INNER corners, e.g. 9x6")
     parser.add_argument("--square", type=float, help="chessboard square size in metres")
     parser.add_argument("--wall", action="store_true", help="flat-wall mode: no board, central ROI")
@@ -78,40 +79,44 @@ def _check_args(args: argparse.Namespace) -> None:
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
 
 
-def _folder_views(args: argparse.Namespace, profile: StereoProfile) -> tuple[Iterator[DepthView], int, float, str]:
+def _folder_views(args: argparse.Namespace, profile: StereoProfile
+                  ) -> tuple[Iterator[DepthView], int, float, str, tuple[float, float] | None]:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.inputs import DEPTH_SUFFIXES, IMAGE_SUFFIXES, FramePaths, list_files, pair_files
-    from s2r.quality.views import device_fb, device_views, stereo_fb, stereo_views
+    from s2r.quality.views import device_fb, device_views, stereo_fb, stereo_views, stereo_visible_m
 
     if args.right is not None:
         left = list_files(args.left, IMAGE_SUFFIXES, option="--left")
         frames = pair_files(left, list_files(args.right, IMAGE_SUFFIXES, option="--right"), kind="right")
-        pipeline = StereoPipeline(profile, preset=args.preset)
-        return stereo_views(pipeline, frames), len(frames), stereo_fb(pipeline), f"stereo, preset {args.preset}"
+        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
+        return (stereo_views(pipeline, frames), len(frames), stereo_fb(pipeline), f"stereo, preset {args.preset}",
+                stereo_visible_m(pipeline))
     depth = list_files(args.depth, DEPTH_SUFFIXES, option="--depth")
     if args.left is None:  # flat wall without images
         frames = [FramePaths(d, depth=d) for d in depth]
     else:
         frames = pair_files(list_files(args.left, IMAGE_SUFFIXES, option="--left"), depth, kind="depth")
     return device_views(profile, frames, depth_scale_m=args.depth_scale), len(frames), device_fb(profile), \
-        "device depth"
+        "device depth", None
 
 
-def _bag_views(args: argparse.Namespace, profile: StereoProfile) -> tuple[Iterator[DepthView], int | None, float, str]:
+def _bag_views(args: argparse.Namespace, profile: StereoProfile
+               ) -> tuple[Iterator[DepthView], int | None, float, str, tuple[float, float] | None]:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.bags import bag_pairs, decode_depth, decode_image
     from s2r.quality.run import DepthView
-    from s2r.quality.views import device_fb, stereo_fb, stereo_view
+    from s2r.quality.views import device_fb, stereo_fb, stereo_view, stereo_visible_m
 
     if args.right_topic is not None:
-        pipeline = StereoPipeline(profile, preset=args.preset)
+        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
 
         def stereo() -> Iterator[DepthView]:
             for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, args.right_topic,
                                                       other_flag="--right-topic", max_dt_s=args.max_dt):
                 yield stereo_view(pipeline, name, decode_image(lm, lt), decode_image(rm, rt))
 
-        return stereo(), None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}"
+        return stereo(), None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}", \
+            stereo_visible_m(pipeline)
 
     def device() -> Iterator[DepthView]:
         import cv2
@@ -124,19 +129,20 @@ def _bag_views(args: argparse.Namespace, profile: StereoProfile) -> tuple[Iterat
             yield DepthView(name, grey, decode_depth(dm, dt, scale_m=args.depth_scale, name=name),
                             profile.left.K, profile.left.D)
 
-    return device(), None, device_fb(profile), "device depth from bag"
+    return device(), None, device_fb(profile), "device depth from bag", None
 
 
 def _measure(args: argparse.Namespace, profile: StereoProfile) -> QualityResult:
     from s2r.quality.run import measure_board_views, measure_wall_views
 
-    views, total, fb, source = _bag_views(args, profile) if args.bag is not None else _folder_views(args, profile)
+    source_of = _bag_views if args.bag is not None else _folder_views
+    views, total, fb, source, visible = source_of(args, profile)
     bar = ProgressBar(enabled=False if (args.quiet or args.json) else None)
     if args.wall:
-        return measure_wall_views(profile, views, fb_px_m=fb, source=f"{source}, flat wall", roi_fraction=args.roi,
-                                  distance_m=args.distance, progress=bar, total=total)
+        return measure_wall_views(profile, views, fb_px_m=fb, source=f"{source}, flat wall",
+                                  roi_fraction=args.roi, distance_m=args.distance, progress=bar, total=total)
     return measure_board_views(profile, views, pattern=args.pattern, square_m=args.square, fb_px_m=fb,
-                               source=source, total=total, progress=bar)
+                               source=source, total=total, visible_m=visible, progress=bar)
 
 
 def _cmd_depth_quality(args: argparse.Namespace) -> int:

@@ -14,8 +14,11 @@ the depth is in; rays ``(x, y, 1)`` are that camera's undistorted normalised coo
 - ``fill_rate_pct``: share of ROI pixels with a valid depth (finite, > 0).
 - ``distance_m``: median ground-truth depth over the ROI (or the measured median without a ground truth).
 
-The plane is fitted by total least squares (SVD of the centred points) to every valid ROI pixel, without an
-outlier pass: Intel's RMS keeps every valid pixel, so flying pixels show in the figure as they do in the tool.
+The plane is fitted by total least squares (SVD of the centred points), then refitted once on the pixels within
+5 robust sigmas (1.4826 MAD of the depth residuals) so that gross mismatches do not tilt it; the RMS keeps EVERY
+valid pixel, as Intel's does, so mismatches and flying pixels show in the figure. ``outlier_pct`` says how many
+valid pixels lie beyond those 5 sigmas (none in Gaussian noise): a large plane-fit RMS with outliers is
+mismatching, not noise.
 """
 
 from __future__ import annotations
@@ -66,6 +69,7 @@ class FrameQuality:
     valid_pixels: int
     tilt_deg: float | None = None
     pose_group: int | None = None
+    outlier_pct: float | None = None
     note: str = ""
 
     def as_dict(self) -> dict[str, Any]:
@@ -133,13 +137,26 @@ def frame_quality(image: str, depth_m: FloatArray, rays: FloatArray, *, fb_px_m:
         accuracy = float(np.median((z[ok] - zt[ok]) / zt[ok])) * 100.0 if ok.any() else None
     elif distance_m is not None:
         accuracy = float(np.median(z - distance_m)) / distance_m * 100.0
-    points = np.column_stack([xy * z[:, None], z])
-    fitted = plane_depth(fit_plane(points), xy)
+    fitted, outliers = _robust_fit(z, xy)
     ok = np.isfinite(fitted)
     dz = z[ok] - fitted[ok]
     rms_pct = _rms(dz) / dist * 100.0
     subpixel = _rms(fb_px_m * dz / np.square(fitted[ok]))
-    return FrameQuality(image, dist, accuracy, rms_pct, subpixel, fill, n_roi, n_valid, tilt)
+    return FrameQuality(image, dist, accuracy, rms_pct, subpixel, fill, n_roi, n_valid, tilt,
+                        outlier_pct=100.0 * outliers / n_valid)
+
+
+def _robust_fit(z: FloatArray, xy: FloatArray) -> tuple[FloatArray, int]:
+    """Fitted plane depth at each pixel (TLS, then one refit inside 5 robust sigmas) and the outlier count."""
+    points = np.column_stack([xy * z[:, None], z])
+    fitted = plane_depth(fit_plane(points), xy)
+    resid = z - fitted
+    finite = np.isfinite(resid)
+    mad = float(np.median(np.abs(resid[finite] - np.median(resid[finite])))) if finite.any() else 0.0
+    inliers = finite & (np.abs(resid) <= max(5 * 1.4826 * mad, 1e-9))
+    if inliers.sum() >= MIN_FIT_PIXELS and inliers.sum() < finite.sum():
+        fitted = plane_depth(fit_plane(points[inliers]), xy)
+    return fitted, int(finite.sum() - inliers.sum())
 
 
 def temporal_noise_pct(depths: Sequence[FloatArray], distance_m: float) -> float | None:

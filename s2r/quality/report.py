@@ -11,7 +11,8 @@ from s2r.quality.summary import BinQuality
 
 __all__ = ["FRAME_HEADERS", "bin_rows", "frame_rows", "quality_lines", "quality_sections", "write_quality_report"]
 
-FRAME_HEADERS = ("image", "distance m", "Z accuracy %", "plane-fit RMS %", "sub-pixel RMS px", "fill rate %", "note")
+FRAME_HEADERS = ("image", "distance m", "Z accuracy %", "plane-fit RMS %", "sub-pixel RMS px", "fill rate %",
+                 "outliers %", "note")
 BIN_HEADERS = ("bin m", "frames", "distance m", "Z accuracy %", "plane-fit RMS %", "sub-pixel RMS px",
                "fill rate %", "temporal noise %", "theory RMS % (0.08 px)")
 
@@ -23,7 +24,7 @@ def _f(value: float | None, digits: int = 2) -> str:
 def frame_rows(frames: list[FrameQuality]) -> list[list[str]]:
     """One row per frame, formatted."""
     return [[f.image, _f(f.distance_m, 3), _f(f.z_accuracy_pct), _f(f.plane_fit_rms_pct), _f(f.subpixel_rms_px, 3),
-             _f(f.fill_rate_pct, 1), f.note] for f in frames]
+             _f(f.fill_rate_pct, 1), _f(f.outlier_pct, 1), f.note] for f in frames]
 
 
 def bin_rows(bins: list[BinQuality]) -> list[list[str]]:

@@ -104,6 +104,16 @@ def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb
     return frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane), mask
 
 
+def _range_note(quality: FrameQuality, visible_m: tuple[float, float] | None) -> FrameQuality:
+    d = quality.distance_m
+    if visible_m is None or d is None or visible_m[0] <= d <= visible_m[1]:
+        return quality
+    note = (f"board at {d:.3f} m is outside the matcher's {visible_m[0]:.3f}-{visible_m[1]:.1f} m: its depth "
+            "is mismatched, not noisy (raise num_disparities / lower matcher.min_depth_m)")
+    log.warning("%s: %s", quality.image, note)
+    return FrameQuality(**{**quality.as_dict(), "note": note})
+
+
 def _check_shapes(view: DepthView) -> None:
     if view.grey is not None and view.grey.shape[:2] != view.depth_m.shape:
         g, d = view.grey.shape, view.depth_m.shape
@@ -114,9 +124,11 @@ def _check_shapes(view: DepthView) -> None:
 def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, pattern: tuple[int, int],
                         square_m: float, fb_px_m: float, source: str, total: int | None = None,
                         bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M,
+                        visible_m: tuple[float, float] | None = None,
                         progress: ProgressCallback | None = None) -> QualityResult:
     """Score every view on its chessboard (``pattern`` inner corners, ``square_m`` metres): see the module
-    docstring. Views without a detectable board are listed with a note and no metrics, never dropped."""
+    docstring. Views without a detectable board are listed with a note and no metrics, never dropped.
+    ``visible_m`` (near, far metres) is the matcher's depth range: a board outside it gets a warning note."""
     frames: list[FrameQuality] = []
     poses: list[FloatArray | None] = []
     repeats = _Repeats()
@@ -129,6 +141,7 @@ def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, p
             poses.append(None)
         else:
             quality, mask = _score_board(view, board, pattern, fb_px_m)
+            quality = _range_note(quality, visible_m)
             group = repeats.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m)
             frames.append(FrameQuality(**{**quality.as_dict(), "pose_group": group}))
             poses.append(board.T_cam_board)

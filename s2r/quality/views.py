@@ -15,12 +15,18 @@ from s2r.profile import StereoProfile
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, FramePaths, read_depth, read_grey
 from s2r.quality.run import DepthView
 
-__all__ = ["device_fb", "device_views", "stereo_fb", "stereo_view", "stereo_views"]
+__all__ = ["device_fb", "device_views", "stereo_fb", "stereo_view", "stereo_views", "stereo_visible_m"]
 
 
 def stereo_fb(pipeline: StereoPipeline) -> float:
     """Rectified focal length (px) times baseline (m) of the pipeline's profile-size rectification."""
     return float(pipeline.rectification.fx_px * pipeline.rectification.baseline_m)
+
+
+def stereo_visible_m(pipeline: StereoPipeline) -> tuple[float, float]:
+    """Depth range (near, far metres) the pipeline's disparity range can see."""
+    fb, cfg = stereo_fb(pipeline), pipeline.config
+    return fb / max(cfg.min_disparity + cfg.num_disparities - 1, 1), fb / max(cfg.min_disparity, 0.5)
 
 
 def device_fb(profile: StereoProfile) -> float:
