@@ -103,33 +103,15 @@ def _folder_views(args: argparse.Namespace, profile: StereoProfile
 def _bag_views(args: argparse.Namespace, profile: StereoProfile
                ) -> tuple[Iterator[DepthView], int | None, float, str, tuple[float, float] | None]:
     from s2r.depth.pipeline import StereoPipeline
-    from s2r.quality.bags import bag_pairs, decode_depth, decode_image
-    from s2r.quality.run import DepthView
-    from s2r.quality.views import device_fb, stereo_fb, stereo_view, stereo_visible_m
+    from s2r.quality.views import bag_device_views, bag_stereo_views, device_fb, stereo_fb, stereo_visible_m
 
     if args.right_topic is not None:
         pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
-
-        def stereo() -> Iterator[DepthView]:
-            for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, args.right_topic,
-                                                      other_flag="--right-topic", max_dt_s=args.max_dt):
-                yield stereo_view(pipeline, name, decode_image(lm, lt), decode_image(rm, rt))
-
-        return stereo(), None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}", \
-            stereo_visible_m(pipeline)
-
-    def device() -> Iterator[DepthView]:
-        import cv2
-        import numpy as np
-
-        for name, (lm, lt), (dm, dt) in bag_pairs(args.bag, args.left_topic, args.depth_topic,
-                                                  other_flag="--depth-topic", max_dt_s=args.max_dt):
-            image = decode_image(lm, lt)
-            grey = image if image.ndim == 2 else np.asarray(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), np.uint8)
-            yield DepthView(name, grey, decode_depth(dm, dt, scale_m=args.depth_scale, name=name),
-                            profile.left.K, profile.left.D)
-
-    return device(), None, device_fb(profile), "device depth from bag", None
+        views = bag_stereo_views(pipeline, args.bag, args.left_topic, args.right_topic, max_dt_s=args.max_dt)
+        return views, None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}", stereo_visible_m(pipeline)
+    views = bag_device_views(profile, args.bag, args.left_topic, args.depth_topic, max_dt_s=args.max_dt,
+                             depth_scale_m=args.depth_scale)
+    return views, None, device_fb(profile), "device depth from bag", None
 
 
 def _measure(args: argparse.Namespace, profile: StereoProfile) -> QualityResult:

@@ -12,10 +12,12 @@ from numpy.typing import NDArray
 from s2r.depth.pipeline import StereoPipeline
 from s2r.errors import DepthError
 from s2r.profile import StereoProfile
+from s2r.quality.bags import bag_pairs, decode_depth, decode_image
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, FramePaths, read_depth, read_grey
 from s2r.quality.run import DepthView
 
-__all__ = ["device_fb", "device_views", "stereo_fb", "stereo_view", "stereo_views", "stereo_visible_m"]
+__all__ = ["bag_device_views", "bag_stereo_views", "device_fb", "device_views", "stereo_fb", "stereo_view",
+           "stereo_views", "stereo_visible_m"]
 
 
 def stereo_fb(pipeline: StereoPipeline) -> float:
@@ -70,3 +72,22 @@ def device_views(profile: StereoProfile, frames: Sequence[FramePaths], *,
         grey = read_grey(frame.left) if frame.left != frame.depth else None
         depth = read_depth(frame.depth, scale_m=depth_scale_m)
         yield DepthView(frame.left.name if grey is not None else frame.depth.name, grey, depth, K, D)
+
+
+def bag_stereo_views(pipeline: StereoPipeline, bag: Path, left_topic: str, right_topic: str, *,
+                     max_dt_s: float) -> Iterator[DepthView]:
+    """Stereo pairs from a bag's left and right image topics through the pipeline (see :func:`stereo_view`)."""
+    for name, (lm, lt), (rm, rt) in bag_pairs(bag, left_topic, right_topic, other_flag="--right-topic",
+                                              max_dt_s=max_dt_s):
+        yield stereo_view(pipeline, name, decode_image(lm, lt), decode_image(rm, rt))
+
+
+def bag_device_views(profile: StereoProfile, bag: Path, left_topic: str, depth_topic: str, *, max_dt_s: float,
+                     depth_scale_m: float = DEFAULT_DEPTH_SCALE_M) -> Iterator[DepthView]:
+    """Left image and device depth topics of a bag, in the left camera (profile intrinsics, distortion)."""
+    for name, (lm, lt), (dm, dt) in bag_pairs(bag, left_topic, depth_topic, other_flag="--depth-topic",
+                                              max_dt_s=max_dt_s):
+        image = decode_image(lm, lt)
+        grey = image if image.ndim == 2 else np.asarray(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), np.uint8)
+        yield DepthView(name, grey, decode_depth(dm, dt, scale_m=depth_scale_m, name=name), profile.left.K,
+                        profile.left.D)
