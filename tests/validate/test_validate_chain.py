@@ -68,7 +68,7 @@ def test_report_is_one_self_contained_page(pair_run: tuple[int, str, Path]) -> N
     images = re.findall(r"<img src='data:image/png;base64,", html)
     assert len(images) >= 6  # 2 heat maps, resolution, depth curves, 2 sample strips
     assert not re.search(r"(src|href)=['\"]https?:", html)
-    for title in ("Verdict", "What to change", "Parameters", "Projection difference", "Recovered calibration",
+    for title in ("Verdict", "What to change", "Parameters", "Projection difference", "The test bench itself",
                   "Depth accuracy", "Sample images", "Sensor XML"):
         assert title in html
 
