@@ -118,6 +118,15 @@ def _what(rows: Sequence[ParamRow], names: Sequence[str]) -> str:
     return ""
 
 
+def _centre_offsets(sim: StereoProfile, real: StereoProfile) -> str:
+    """Where each left principal point sits from its image centre ((W - 1) / 2, (H - 1) / 2), pixels."""
+    def offset(p: StereoProfile) -> str:
+        cam = p.left
+        return f"({cam.cx_px - (cam.width_px - 1) / 2:+.2f}, {cam.cy_px - (cam.height_px - 1) / 2:+.2f})"
+
+    return f"left principal point from the image centre: sim {offset(sim)} px vs real {offset(real)} px"
+
+
 def _own_causes(failed: dict[str, ParamRow], pp_edit: bool) -> dict[str, list[str]]:
     """Parameter rows attributed to each parameter cause (``{cause: [row names]}``)."""
     causes: dict[str, list[str]] = {}
@@ -202,12 +211,14 @@ def group_failures(checks: Sequence[Check], rows: Sequence[ParamRow], edits: Seq
     for check in checks:
         if not check.passed:
             grouped.setdefault(_attribute(check, causes, fb_key), []).append(check)
-    out = []
-    for key in CAUSE_TITLES:
-        if key not in grouped:
-            continue
-        own = _OWN_PARAMS.get(key, ())
+    out: list[RootCause] = []
+    for key in (k for k in CAUSE_TITLES if k in grouped):
         mine = [e for e in edits if e.parameter in _EDIT_FOR.get(key, ())]
-        what = _what(rows, own) if key in _OWN_PARAMS else grouped[key][0].text
-        out.append(RootCause(key, what, _fix_text(key, mine, preset), grouped[key], mine))
+        what = _what(rows, _OWN_PARAMS[key]) if key in _OWN_PARAMS else grouped[key][0].text
+        if key == "principal_point" and sim is not None and real is not None:
+            what = _centre_offsets(sim, real)
+        earlier = next((c for c in out if mine and c.edits == mine), None)
+        fix = (f"the same edit as {earlier.title.lower()} ({', '.join(e.parameter for e in mine)})"
+               if earlier is not None else _fix_text(key, mine, preset))
+        out.append(RootCause(key, what, fix, grouped[key], mine))
     return out

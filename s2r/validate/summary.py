@@ -87,8 +87,8 @@ def _verdict_lines(result: ValidationResult) -> list[str]:
         return [f"PASS: all {len(result.checks)} checks within tolerance"]
     causes = result.root_causes
     what = "the sim differs from the real camera" if result.pair else "the profile fails its self-check"
-    lines = [f"FAIL: {what}: {len(causes)} root cause(s) explain {len(result.failures)} of {len(result.checks)} "
-             "failing checks:"]
+    lines = [f"FAIL: {what}: {len(causes)} root cause(s) behind {len(result.failures)} failing checks (of "
+             f"{len(result.checks)}); each with the checks it explains and the one edit that fixes it:"]
     for i, cause in enumerate(causes, 1):
         lines += _cause_lines(i, cause)
     return lines
@@ -110,12 +110,9 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
     if result.depth:
         lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
-    if result.edits:
-        lines.append("To make the sim match the real camera:")
-        for e in result.edits:
-            if e.parameter == "sensor XML":
-                lines.append(f"  write them: {e.where}")
-            else:
-                lines.append(f"  {e.parameter}: {e.current} -> {e.target}  [{e.where}]")
+    lines += _verdict_lines(result)
+    xml = [e for e in result.edits if e.parameter == "sensor XML"]
+    if xml:
+        lines.append(f"  every edit at once: {xml[0].where}")
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
-    return [*lines, *_verdict_lines(result), f"({timing})"]
+    return [*lines, f"({timing})"]
