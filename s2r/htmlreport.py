@@ -41,7 +41,8 @@ pre { white-space: pre-wrap; overflow-wrap: anywhere; background: #f6f6f6; paddi
 .banner small { display: block; font-size: 0.7em; font-weight: 400; margin-top: 0.3em; }
 details > summary { cursor: pointer; font-size: 1.5em; font-weight: bold; margin-top: 1.5em;
   border-bottom: 1px solid #bbb; }
-td.text, th.text { text-align: left; }
+td.text, th.text { text-align: left; vertical-align: top; }
+td.small { font-size: 0.85em; } td ul { margin: 0; padding-left: 1.1em; }
 """
 
 #: Paragraphs starting with one of these are block HTML, not wrapped in <p>.

@@ -81,6 +81,7 @@ class RootCause:
     fix: str
     checks: list[Check] = field(default_factory=list)
     edits: list[Edit] = field(default_factory=list)
+    primary: str = ""  # name of the check quoted in ``what`` (not repeated among the consequences)
 
     @property
     def title(self) -> str:
@@ -88,10 +89,16 @@ class RootCause:
         return CAUSE_TITLES[self.key]
 
     @property
+    def short_fix(self) -> str:
+        """The fix without the where-to-write-it detail (one terminal line for most causes)."""
+        if not self.edits or self.fix.startswith("the same edit"):
+            return self.fix
+        return "; ".join(f"{e.parameter} {e.current} -> {e.target}" for e in self.edits)
+
+    @property
     def consequences(self) -> list[Check]:
-        """Attributed checks that are not the cause's own parameters (the effects seen elsewhere)."""
-        own = _OWN_PARAMS.get(self.key, ())
-        return [c for c in self.checks if not (c.section == "parameters" and c.name in own)]
+        """Every attributed failing check but the one quoted in ``what``: what else this one cause breaks."""
+        return [c for c in self.checks if c.name != self.primary]
 
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON (``root_causes`` in ``s2r validate --json``)."""
@@ -104,8 +111,8 @@ def _failed_rows(rows: Sequence[ParamRow]) -> dict[str, ParamRow]:
     return {r.name: r for r in rows if r.exceeds_tolerance}
 
 
-def _what(rows: Sequence[ParamRow], names: Sequence[str]) -> str:
-    """``HFOV: sim 60 vs real 86.9 deg`` for the first row among ``names`` (failing ones first)."""
+def _what(rows: Sequence[ParamRow], names: Sequence[str]) -> tuple[str, str]:
+    """``("HFOV", "HFOV: sim 60 vs real 86.9 deg")`` for the first row among ``names`` (failing ones first)."""
     by_name = {r.name: r for r in rows}
     ordered = [n for n in names if n in by_name and by_name[n].exceeds_tolerance] + list(names)
     for name in ordered:
@@ -114,8 +121,8 @@ def _what(rows: Sequence[ParamRow], names: Sequence[str]) -> str:
             sim = r.sim if isinstance(r.sim, str) else f"{r.sim:.4g}"
             real = r.real if isinstance(r.real, str) else f"{r.real:.4g}"
             unit = "" if r.unit.startswith("max") or (r.unit == "px" and "x" in sim) else f" {r.unit}"
-            return f"{r.name}: sim {sim} vs real {real}{unit}"
-    return ""
+            return r.name, f"{r.name}: sim {sim} vs real {real}{unit}"
+    return "", ""
 
 
 def _centre_offsets(sim: StereoProfile, real: StereoProfile) -> str:
@@ -214,11 +221,12 @@ def group_failures(checks: Sequence[Check], rows: Sequence[ParamRow], edits: Seq
     out: list[RootCause] = []
     for key in (k for k in CAUSE_TITLES if k in grouped):
         mine = [e for e in edits if e.parameter in _EDIT_FOR.get(key, ())]
-        what = _what(rows, _OWN_PARAMS[key]) if key in _OWN_PARAMS else grouped[key][0].text
+        primary, what = (_what(rows, _OWN_PARAMS[key]) if key in _OWN_PARAMS
+                         else (grouped[key][0].name, grouped[key][0].text))
         if key == "principal_point" and sim is not None and real is not None:
-            what = _centre_offsets(sim, real)
+            primary, what = "", _centre_offsets(sim, real)
         earlier = next((c for c in out if mine and c.edits == mine), None)
         fix = (f"the same edit as {earlier.title.lower()} ({', '.join(e.parameter for e in mine)})"
                if earlier is not None else _fix_text(key, mine, preset))
-        out.append(RootCause(key, what, fix, grouped[key], mine))
+        out.append(RootCause(key, what, fix, grouped[key], mine, primary))
     return out

@@ -51,22 +51,25 @@ def _banner(result: ValidationResult) -> tuple[str, str]:
                     f"beyond tolerance, explained by {len(causes)} root cause(s) below</small>")
 
 
-def _cause_rows(result: ValidationResult) -> list[list[str]]:
-    rows = []
+def _causes_table(result: ValidationResult) -> str:
+    """Root causes as an HTML table: cause, what differs, the failing checks it explains, the one edit."""
+    body = []
     for i, cause in enumerate(result.root_causes, 1):
-        effects = "; ".join(c.text for c in cause.consequences) or "-"
-        rows.append([f"{i}. {cause.title}", cause.what, effects, cause.fix])
-    return rows
+        effects = "".join(f"<li>{html.escape(c.text)}</li>" for c in cause.consequences)
+        body.append(f"<tr class='fail'><td class='text'><b>{i}. {html.escape(cause.title)}</b></td>"
+                    f"<td class='text'>{html.escape(cause.what)}</td>"
+                    f"<td class='text small'>{f'<ul>{effects}</ul>' if effects else '-'}</td>"
+                    f"<td class='text'>{html.escape(cause.fix)}</td></tr>")
+    head = "".join(f"<th class='text'>{h}</th>" for h in ("root cause", "what differs (sim vs real)",
+                                                           "also fails because of it", "the one edit that fixes it"))
+    return ("<table class='causes'><caption>Root causes: every failing check is listed once, under the parameter "
+            f"that explains it</caption><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
 
 
 def _verdict(result: ValidationResult) -> ReportSection:
     section = ReportSection("Verdict", banner=_banner(result))
-    rows = _cause_rows(result)
-    if rows:
-        section.tables.append(html_table(
-            ["root cause", "what differs (sim vs real)", "consequences (failing checks it explains)",
-             "the one edit that fixes it"], rows, row_classes=["fail"] * len(rows), left=(0, 1, 2, 3),
-            caption="Root causes: every failing check is listed once, under the parameter that explains it"))
+    if result.root_causes:
+        section.tables.append(_causes_table(result))
     return section
 
 

@@ -77,7 +77,7 @@ def _cause_lines(index: int, cause: RootCause) -> list[str]:
     if effects:
         lines += textwrap.wrap(f"also fails: {', '.join(effects)}", width=_WIDTH, initial_indent=" " * 5,
                                subsequent_indent=" " * 7)
-    lines += textwrap.wrap(f"fix: {cause.fix}", width=_WIDTH, initial_indent=" " * 5, subsequent_indent=" " * 7)
+    lines += textwrap.wrap(f"fix: {cause.short_fix}", width=_WIDTH, initial_indent=" " * 5, subsequent_indent=" " * 7)
     return lines
 
 
@@ -113,6 +113,6 @@ def summary_lines(result: ValidationResult) -> list[str]:
     lines += _verdict_lines(result)
     xml = [e for e in result.edits if e.parameter == "sensor XML"]
     if xml:
-        lines.append(f"  every edit at once: {xml[0].where}")
+        lines.append(f"  where to write each edit: --report, --json; every edit at once: {xml[0].where}")
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
     return [*lines, f"({timing})"]

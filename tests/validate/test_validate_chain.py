@@ -52,9 +52,11 @@ def test_sim_vs_real_fails_naming_fov_resolution_and_baseline(pair_run: tuple[in
     verdict = text[text.index("FAIL:"):]
     for name in ("image size", "HFOV", "baseline"):
         assert name in verdict
-    # the edits, with the values a Gazebo description needs
-    assert "resolution: 640x480 -> 848x480" in text
-    assert "horizontal_fov: 1.0470 rad -> 1.5708 rad" in text
+    # grouped by root cause, each with the edit and the values a Gazebo description needs
+    assert "1. Resolution: image size: sim 640x480 vs real 848x480" in verdict
+    assert "2. Focal length / field of view: HFOV:" in verdict
+    assert "resolution 640x480 -> 848x480" in verdict
+    assert "horizontal_fov 1.0470 rad -> 1.5708 rad" in verdict
     assert 'xyz="0 -0.05 0"' in text and "export-gazebo realsense_d435_848x480" in text
     # the renderer + calibration chain recovers both profiles
     assert text.count("all within tolerance") == 2
