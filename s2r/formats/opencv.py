@@ -14,11 +14,9 @@ square size of 1 unless told otherwise, so its T is in SQUARES: pass ``t_scale_m
 from __future__ import annotations
 
 import logging
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numpy as np
@@ -34,8 +32,8 @@ from s2r.formats._common import (
     check_rotation_field,
     distortion_for,
     provenance_for,
-    read_text,
 )
+from s2r.formats.filestorage import read_filestorage
 from s2r.profile import Camera, Distortion, StereoProfile
 from s2r.rectification import stereo_rectification
 
@@ -66,46 +64,10 @@ class OpenCVStereo:
     paths: tuple[Path, ...]
 
 
-def _cv_message(exc: BaseException) -> str:
-    """The useful tail of a cv2.error text (``file(line): what``), on one line."""
-    cause = exc.__cause__ if exc.__cause__ is not None else exc
-    text = " ".join(str(cause).split())
-    found = re.search(r"in function '[^']*?\((\d+)\): (.*)'", text)
-    if found:
-        return f"line {found.group(1)}: {found.group(2)}"
-    found = re.search(r"error: \(-?\d+:([^)]*)\) (.*)", text)
-    return f"{found.group(1)}: {found.group(2)}" if found else text
-
-
-def _node_value(node: Any) -> NodeValue | None:
-    if node.isString():
-        return str(node.string())
-    if node.isInt() or node.isReal():
-        return float(node.real())
-    if node.isSeq():
-        return np.array([node.at(i).real() for i in range(node.size())], dtype=np.float64)
-    mat = node.mat()
-    return None if mat is None else np.asarray(mat, dtype=np.float64)
-
-
 def _read_nodes(path: Path) -> dict[str, NodeValue | None]:
-    """Every top-level node of a FileStorage file; a parse error becomes a one-line FormatError."""
-    read_text(path)  # missing / unreadable file -> FormatError before cv2 logs its own complaint
-    try:
-        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-        if not storage.isOpened():
-            raise FormatError("OpenCV cannot open this file as FileStorage", path=path)
-        root = storage.root()
-        if not root.isMap():
-            raise FormatError("no named nodes found (expected M1, D1, M2, D2, R, T)", path=path,
-                              hint="is this an OpenCV FileStorage file?")
-        nodes = {str(key): _node_value(storage.getNode(key)) for key in root.keys()}  # noqa: SIM118 (cv2.FileNode)
-        storage.release()
-    except FormatError:
-        raise
-    except Exception as exc:  # cv2.error, or SystemError wrapping it
-        raise FormatError(f"malformed or truncated OpenCV FileStorage: {_cv_message(exc)}", path=path,
-                          hint="re-export the file from OpenCV") from None
+    """Every top-level node of a FileStorage file, read by s2r's safe reader (never cv2.FileStorage, which
+    corrupts memory on some malformed files); a bad file becomes a one-line FormatError."""
+    nodes = read_filestorage(path)
     _check_matrix_nodes(nodes, path)
     return nodes
 
