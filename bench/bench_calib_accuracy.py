@@ -60,7 +60,6 @@ def _errors(rig: Rig, cams: list[tuple[float, float, float, float]], baseline: f
 
 
 def run_s2r(rig: Rig, distortion: str, **kw: Any) -> Row:
-    kw.setdefault("refine_joint", False)
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="bench",
                                       distortion=distortion, max_error_px=None, sources=[], **kw)
     p = res.profile
