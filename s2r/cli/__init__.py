@@ -14,10 +14,16 @@ import os
 import sys
 from collections.abc import Sequence
 
-from pydantic import ValidationError
-
 from s2r._version import __version__
-from s2r.cli import calibrate_cmd, depth_cmd, profile_cmd, render_cmd, sources_cmd, validate_cmd
+from s2r.cli import (
+    calibrate_cmd,
+    depth_cmd,
+    depth_quality_cmd,
+    profile_cmd,
+    render_cmd,
+    sources_cmd,
+    validate_cmd,
+)
 from s2r.errors import S2RError
 
 __all__ = ["build_parser", "main"]
@@ -37,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     sources_cmd.register(sub, profile_sub)
     render_cmd.register(sub)
     depth_cmd.register(sub)
+    depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
     return parser
@@ -80,6 +87,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _report(exc: Exception) -> int:
     """Print ``exc`` as one ``error:`` line; its exit code (2 for bad input, 3 for a bug in s2r)."""
+    from pydantic import ValidationError  # only on the error path: keeps `s2r --help` fast
+
     try:
         if isinstance(exc, S2RError):
             print(f"error: {exc}", file=sys.stderr)
