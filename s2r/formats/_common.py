@@ -31,6 +31,7 @@ from s2r.profile import (
 )
 
 __all__ = [
+    "MAX_ABS_VALUE",
     "as_float",
     "as_int",
     "as_matrix",
