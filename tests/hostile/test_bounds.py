@@ -162,3 +162,31 @@ def test_depth_alpha_out_of_range(tmp_path: Path, capsys: pytest.CaptureFixture[
     err = capsys.readouterr().err
     assert code == 2 and "--alpha" in err and "Traceback" not in err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("fx", [1e308, 1e-300])
+def test_validate_refuses_absurd_focal_lengths(tmp_path: Path, capsys: pytest.CaptureFixture[str], fx: float) -> None:
+    data = _profile_data()
+    _set(data, "left.fx_px", fx)
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    err = _one_error(["validate", str(path), "--quick", "-o", str(tmp_path / "report")], capsys)
+    assert "field of view" in err and not (tmp_path / "report").exists()
+
+
+@pytest.mark.parametrize("kind", ["existing", "fifo", "symlink"])
+def test_calibrate_checks_output_before_any_work(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                 kind: str) -> None:
+    import os
+
+    out = tmp_path / "out.yaml"
+    if kind == "existing":
+        out.write_text("keep", encoding="utf-8")
+    elif kind == "fifo":
+        os.mkfifo(out)
+    else:
+        out.symlink_to(tmp_path / "target.yaml")
+    (tmp_path / "images").mkdir()  # an empty input: the output is refused before the input is even read
+    err = _one_error(["calibrate", str(tmp_path / "images"), "-o", str(out)], capsys)
+    assert str(out) in err and "image" not in err.split(str(out), 1)[1].split("(")[0]
+    assert not (tmp_path / "out.yaml.corners").exists()
