@@ -48,7 +48,8 @@ def _lstat(path: Path) -> os.stat_result | None:
         return None
     except NotADirectoryError:
         parent = next((p for p in path.parents if p.exists() and not p.is_dir()), path.parent)
-        raise S2RError("is a file, expected a folder", path=parent, hint="choose an output folder") from None
+        raise S2RError(f"cannot create folder: {parent} is a file, expected a folder", path=path,
+                       hint="choose an output folder") from None
     except OSError as exc:
         raise S2RError(f"cannot inspect output: {exc.strerror}", path=path, hint="choose another location") from None
 

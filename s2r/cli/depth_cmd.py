@@ -11,7 +11,7 @@ import numpy as np
 from s2r.cli._common import ProgressBar, add_force, add_json, print_json
 from s2r.depth.names import PRESETS, STAGES
 from s2r.errors import DepthError
-from s2r.fileio import check_output_free, prepare_output_dir
+from s2r.fileio import check_output_dir, check_output_free, prepare_output_dir
 
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
@@ -97,6 +97,7 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     from s2r.depth.outputs import limit_depth_range, read_image, write_camera_info, write_outputs
 
     left, right = read_image(args.left), read_image(args.right)
+    check_output_dir(args.output, force=True)  # "-o FILE": a file where the output folder should be
     names = ["disparity.npy", "depth.png", "depth_color.png", "camera_info.yaml"] + (["points.ply"] if args.ply
                                                                                       else [])
     for name in names:  # refuse before computing or writing anything
