@@ -1,4 +1,6 @@
-"""OpenCV FileStorage (YAML or XML) as OpenCV's stereo_calib sample writes it, read and written by cv2.FileStorage.
+"""OpenCV FileStorage (YAML or XML) as OpenCV's stereo_calib sample writes it.
+
+Read by s2r's safe reader (formats/filestorage.py, never cv2.FileStorage); written by cv2.FileStorage.
 
 Nodes: ``M1 D1 M2 D2`` (camera matrices and distortion), ``R T`` (OpenCV extrinsics,
 ``X_right = R X_left + T``), optionally ``R1 R2 P1 P2 Q`` (rectification; ignored on import, recomputed
@@ -14,7 +16,6 @@ square size of 1 unless told otherwise, so its T is in SQUARES: pass ``t_scale_m
 from __future__ import annotations
 
 import logging
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,9 +35,9 @@ from s2r.formats._common import (
     check_rotation_field,
     distortion_for,
     provenance_for,
-    read_text,
     rotation_as_printed,
 )
+from s2r.formats.filestorage import read_filestorage
 from s2r.formats.slam_settings import flavour_of, load_settings
 from s2r.profile import Camera, Distortion, MonoProfile, StereoProfile
 from s2r.rectification import stereo_rectification
@@ -72,31 +73,6 @@ class OpenCVStereo:
     rectified: tuple[FloatArray, FloatArray] | None = None
 
 
-def _cv_message(exc: BaseException) -> str:
-    """The useful tail of a cv2.error text (``file(line): what``), on one line."""
-    cause = exc.__cause__ if exc.__cause__ is not None else exc
-    text = " ".join(str(cause).split())
-    found = re.search(r"in function '[^']*?\((\d+)\): (.*)'", text)
-    if found:
-        return f"line {found.group(1)}: {found.group(2)}"
-    found = re.search(r"error: \(-?\d+:([^)]*)\) (.*)", text)
-    return f"{found.group(1)}: {found.group(2)}" if found else text
-
-
-def _node_value(node: Any) -> NodeValue | None:
-    if node.isMap() and "dt" not in node.keys():  # noqa: SIM118 (cv2.FileNode). A plain map, not a matrix (VINS
-        # distortion_parameters, Kimera {rows, cols, data} T_BS)
-        return {str(k): _node_value(node.getNode(k)) for k in node.keys()}  # noqa: SIM118 (cv2.FileNode)
-    if node.isString():
-        return str(node.string())
-    if node.isInt() or node.isReal():
-        return float(node.real())
-    if node.isSeq():
-        return np.array([node.at(i).real() for i in range(node.size())], dtype=np.float64)
-    mat = node.mat()
-    return None if mat is None else np.asarray(mat, dtype=np.float64)
-
-
 #: Other names the same stereo nodes go by (OpenCV's stereoCalibrate argument names, tutorials' K1 D1 K2 D2).
 _ALIASES: dict[str, tuple[str, ...]] = {"M1": ("K1", "cameraMatrix1", "CM1", "camera_matrix_left"),
                                         "M2": ("K2", "cameraMatrix2", "CM2", "camera_matrix_right"),
@@ -119,24 +95,10 @@ def read_filestorage_nodes(path: Path) -> dict[str, Any]:
 
 
 def _read_nodes(path: Path) -> dict[str, NodeValue | None]:
-    """Every top-level node of a FileStorage file; a parse error becomes a one-line FormatError."""
-    read_text(path)  # missing / unreadable file -> FormatError before cv2 logs its own complaint
-    try:
-        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-        if not storage.isOpened():
-            raise FormatError("OpenCV cannot open this file as FileStorage", path=path)
-        root = storage.root()
-        if not root.isMap():
-            raise FormatError("no named nodes found (expected M1, D1, M2, D2, R, T)", path=path,
-                              hint="is this an OpenCV FileStorage file?")
-        nodes = _with_aliases({str(key): _node_value(storage.getNode(key))
-                               for key in root.keys()})  # noqa: SIM118 (cv2.FileNode)
-        storage.release()
-    except FormatError:
-        raise
-    except Exception as exc:  # cv2.error, or SystemError wrapping it
-        raise FormatError(f"malformed or truncated OpenCV FileStorage: {_cv_message(exc)}", path=path,
-                          hint="re-export the file from OpenCV") from None
+    """Every top-level node of a FileStorage file, read by s2r's safe reader (never cv2.FileStorage, which
+    corrupts memory on some malformed files), with the stereo nodes' other names mapped; a bad file becomes a
+    one-line FormatError."""
+    nodes = _with_aliases(read_filestorage(path))
     _check_matrix_nodes(nodes, path)
     return nodes
 
