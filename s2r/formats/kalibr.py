@@ -137,6 +137,9 @@ def _right_from_left(data: dict[Any, Any], left: str, right: str, path: Path) ->
 
 def _choose(data: dict[Any, Any], left: str | None, right: str | None, path: Path) -> tuple[str, str]:
     cams = sorted((k for k in data if isinstance(k, str) and _index(k) is not None), key=lambda k: _index(k) or 0)
+    if left is None and right is None and len(cams) < 2:
+        raise FormatError(f"a camchain with {len(cams)} camera(s) ({', '.join(cams) or 'none'}): a stereo profile "
+                          "needs two", path=path, field="cam1", hint="pass the stereo camchain (cam0 and cam1)")
     if left is None and right is None:
         left, right = "cam0", "cam1"
         if len(cams) > 2:

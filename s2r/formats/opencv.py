@@ -155,6 +155,15 @@ def read_opencv_stereo(paths: str | Path | Sequence[str | Path]) -> OpenCVStereo
     def where(key: str) -> Path:
         return merged[key][1] if key in merged else files[0]
 
+    calibration_keys = {"M1", "M2", "D1", "D2", "R", "T", "R1", "R2", "P1", "P2", "Q", "camera_matrix"}
+    if not calibration_keys & set(nodes):
+        found = ", ".join(sorted(nodes)[:8]) or "nothing"
+        raise FormatError(f"unrecognised OpenCV FileStorage: no stereo calibration in it (keys: {found})",
+                          path=files[0], hint="expected OpenCV stereo_calib (M1 D1 M2 D2 R T), ORB-SLAM, "
+                          "VINS-Fusion or Kimera-VIO stereo settings")
+    if "camera_matrix" in nodes and "M1" not in nodes:
+        raise FormatError("holds one camera (camera_matrix, distortion_coefficients): a stereo profile needs two",
+                          path=files[0], field="camera_matrix", hint="pass the stereo calibration file(s)")
     required = {}
     for key in ("M1", "D1", "M2", "D2"):
         value = _array(nodes, key, where(key))
