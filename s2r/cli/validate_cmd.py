@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import shlex
 import sys
 from typing import Any
 
@@ -65,6 +66,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     quiet = args.quiet or args.json
     result = validate(sim, real, tolerances=tolerances, settings=settings, jobs=args.jobs,
                       progress=None if quiet else ProgressBar())
+    if args.real is not None:  # the "write them" command names the real profile as the user did (a path works)
+        result.edits = [dataclasses.replace(e, where=e.where.replace(f"export-gazebo {e.target} ",
+                                                                     f"export-gazebo {shlex.quote(args.real)} ", 1))
+                        if e.parameter == "sensor XML" else e for e in result.edits]
     if args.json:
         print_json(result.as_dict())
     else:
