@@ -198,6 +198,10 @@ def build_sections(result: ValidationResult) -> list[ReportSection]:
         sections.append(_recovery(result))
     if result.depth:
         sections += [_depth(result), _samples(result)]
+    if result.recording is not None:
+        from s2r.validate.recording_report import recording_sections
+
+        sections += recording_sections(result.recording)
     if result.gazebo_xml:
         sections.append(_xml(result))
     return sections

@@ -99,6 +99,10 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
     if result.depth:
         lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
+    if result.recording is not None:
+        from s2r.validate.recording_report import recording_lines
+
+        lines += recording_lines(result.recording)
     if result.edits:
         lines.append("To make the sim match the real camera:")
         for e in result.edits:
