@@ -3,7 +3,7 @@
 A preset resolves against a profile into a :class:`MatcherConfig` (plain OpenCV parameter names, disparities in
 pixels). Presets with a fixed disparity range from their source (``seed-sgbm`` 112, ``ros-default`` 64) keep it
 unless ``num_disparities`` is given; the others derive it from the profile's nearest working depth
-(``fx' * B / z_min`` rounded up to 16). Either way a warning is logged when the range cannot see the profile's
+(``fx' * B / z_min + 1`` rounded up to 16). Either way a warning is logged when the range cannot see the profile's
 stated working range.
 """
 
@@ -123,7 +123,8 @@ def resolve_preset(
     :class:`DepthError` when it does not fit the image width.
     """
     z_min = profile.matcher.min_depth_m
-    needed = max(16, math.ceil(fx_px * baseline_m / z_min / 16.0) * 16)
+    # The largest disparity a range reaches is min_disparity + num_disparities - 1: z_min needs fB / z_min of it.
+    needed = max(16, math.ceil((fx_px * baseline_m / z_min + 1) / 16.0) * 16)
     width = profile.image_size[0]
     # A derived range never exceeds the image: clamp it (the warning below then says what is lost).
     derived = min(needed, max(16, (width - 1) // 16 * 16))
@@ -141,7 +142,7 @@ def resolve_preset(
     if nearest > z_min * 1.0001:
         log.warning("preset %s sees no nearer than %.3f m with %d disparities; the profile %s works from %.3f m "
                     "(it needs num_disparities=%d)", preset, nearest, config.num_disparities, profile.name, z_min,
-                    needed)
+                    max(16, math.ceil((fx_px * baseline_m / z_min + 1 - config.min_disparity) / 16.0) * 16))
     return config
 
 

@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Any
+import html
+from typing import TYPE_CHECKING, Any
 
 from s2r.htmlreport import ReportSection, html_table
 from s2r.quality.report import quality_sections
 from s2r.validate.recording import RecordingComparison
 
-__all__ = ["recording_lines", "recording_sections"]
+if TYPE_CHECKING:
+    from s2r.validate.run import ValidationResult
+
+__all__ = ["recording_lines", "recording_section", "recording_sections"]
 
 _HEADERS = ("bin m", "frames real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real", "sim",
             "sub-pixel RMS px real", "sim", "fill % real", "sim", "verdict")
@@ -50,3 +54,16 @@ def recording_sections(comparison: RecordingComparison) -> list[ReportSection]:
     return [ReportSection("Recording: sim vs real on the same boards", paragraphs=[intro], tables=[table]),
             *quality_sections(comparison.real, "Recording, real camera"),
             *quality_sections(comparison.sim, "Recording, sim renders")]
+
+
+def recording_section(result: ValidationResult) -> ReportSection | None:
+    """The validation report's one recording section (None without ``--recording``): the side-by-side table,
+    then each side's per-bin and per-frame tables."""
+    if result.recording is None:
+        return None
+    parts = recording_sections(result.recording)
+    head = parts[0]
+    for extra in parts[1:]:
+        notes = "".join(f"<p class='note'>{p}</p>" for p in extra.paragraphs)
+        head.tables.append(f"<h3>{html.escape(extra.title)}</h3>{notes}" + "".join(extra.tables))
+    return head
