@@ -11,7 +11,7 @@ from s2r.registry import load_profile
 __all__ = ["SCENE_CHOICES", "register"]
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
-SCENE_CHOICES = ("planes", "slanted", "room")
+SCENE_CHOICES = ("planes", "slanted", "span", "room")
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
