@@ -22,7 +22,7 @@ from pathlib import Path
 
 #: The installed console script (what a user types), else the module.
 _SCRIPT = Path(sys.executable).with_name("s2r")
-S2R = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "s2r.cli"]
+S2R = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "s2r"]
 ANCHOR = [sys.executable, "-c", "import numpy, yaml, pydantic"]
 
 
