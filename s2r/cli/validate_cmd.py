@@ -10,10 +10,9 @@ import dataclasses
 import sys
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, parse_distances, print_json
+from s2r.cli._common import ProgressBar, add_force, add_json, load_profile, parse_distances, print_json
 from s2r.errors import ValidateError
 from s2r.fileio import prepare_output_dir
-from s2r.registry import load_profile
 
 __all__ = ["register"]
 
