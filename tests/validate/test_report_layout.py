@@ -19,6 +19,7 @@ from s2r.validate.report import EXTRA_SECTIONS, build_sections
 from s2r.validate.run import QUICK, ValidationResult, _collect_checks, _static_stages
 from s2r.validate.summary import summary_lines
 from s2r.validate.tolerances import Tolerances
+from s2r.validate.verdict import parameter_checks
 from tests.conftest import make_rig
 
 
@@ -88,6 +89,6 @@ def test_principal_point_cause_uses_the_pixels_images_obey() -> None:
     sim, real = load_profile("gazebo_dual_camera"), load_profile("realsense_d435_848x480")
     result = ValidationResult(roles={"sim": sim, "real": real}, settings=QUICK, tolerances=Tolerances())
     _static_stages(result, sim, real)
-    result.checks = _collect_checks(result)
+    result.checks = parameter_checks(result.params)
     (pp,) = [c for c in result.root_causes if c.key == "principal_point"]
     assert "sim (+0.00, +0.00) px" in pp.what
