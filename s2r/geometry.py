@@ -19,6 +19,7 @@ __all__ = [
     "ORTHONORMAL_TOL",
     "R_LINK_OPTICAL",
     "T_LINK_OPTICAL",
+    "baseline_layout_problem",
     "check_matrix",
     "check_rotation",
     "check_vector",
@@ -137,3 +138,27 @@ def as_plain(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def baseline_layout_problem(position_m: ArrayLike) -> tuple[str, str] | None:
+    """Why a right camera at ``position_m`` (metres, in the LEFT optical frame: x right, y down, z forward)
+    makes no usable stereo pair, as ``(code, message)``; None when it is usable.
+
+    One rule for lint, ``from-urdf`` and every export: ``baseline-axis`` when the baseline is zero or its
+    forward component is at least as large as its length / sqrt(2) (no disparity), ``baseline-side`` when
+    the "right" camera sits to the LEFT by at least that much (negative disparities).
+    """
+    t = check_vector(position_m, 3, name="right camera position")
+    b = float(np.linalg.norm(t))
+    if b < 1e-6:
+        return "baseline-axis", "zero baseline: both cameras sit at the same place"
+    tx, _, tz = (float(v) for v in t)
+    if abs(tz) >= b * np.sqrt(0.5):
+        where = "behind" if tz < 0 else "in front of"
+        return "baseline-axis", (f"baseline along the optical axis: the right camera is {abs(tz) * 100:.1f} cm {where} "
+                                 f"the left one along its viewing axis ({abs(tx) * 100:.1f} cm sideways): no stereo "
+                                 "disparity")
+    if tx < 0 and abs(tx) >= b * np.sqrt(0.5):
+        return "baseline-side", (f"the 'right' camera is {abs(tx) * 100:.1f} cm to the LEFT of the left camera "
+                                 "(disparities would be negative)")
+    return None

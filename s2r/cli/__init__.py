@@ -15,7 +15,15 @@ import sys
 from collections.abc import Sequence
 
 from s2r._version import __version__
-from s2r.cli import calibrate_cmd, depth_cmd, profile_cmd, render_cmd, sources_cmd, validate_cmd
+from s2r.cli import (
+    calibrate_cmd,
+    depth_cmd,
+    depth_quality_cmd,
+    profile_cmd,
+    render_cmd,
+    sources_cmd,
+    validate_cmd,
+)
 from s2r.errors import S2RError
 
 __all__ = ["build_parser", "main"]
@@ -35,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     sources_cmd.register(sub, profile_sub)
     render_cmd.register(sub)
     depth_cmd.register(sub)
+    depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
     return parser

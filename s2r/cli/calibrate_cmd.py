@@ -30,11 +30,16 @@ def register(sub: Any) -> None:
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
     p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
-    p.add_argument("--distortion", choices=("k1k2", "plumb_bob", "rational"), default="k1k2",
-                   help="distortion terms to solve (default k1k2: k3 and tangential fixed at 0)")
+    p.add_argument("--distortion", choices=("k1k2p1p2", "k1k2", "plumb_bob", "rational"), default="k1k2p1p2",
+                   help="distortion terms to solve (default k1k2p1p2: k3 fixed at 0, as ROS camera_calibration)")
     p.add_argument("--max-error", type=float, default=None, metavar="PX",
                    help="drop views whose RMS exceeds PX (default: a robust median/MAD threshold)")
-    p.add_argument("--refine-joint", action="store_true", help="refine intrinsics and extrinsics jointly")
+    p.add_argument("--fix-intrinsics", action="store_true",
+                   help="ROS's way: each camera's intrinsics from its own views, held fixed in the stereo solve "
+                        "(default: one joint solve of both cameras, the extrinsics and every board pose)")
+    p.add_argument("--refine-joint", action="store_true", help=argparse.SUPPRESS)  # the default now
+    p.add_argument("--swap", action="store_true",
+                   help="exchange left and right (when s2r finds the right camera to the left of the left one)")
     p.add_argument("--mono", action="store_true", help="calibrate one camera into a camera-only profile")
     p.add_argument("--left", default=None, metavar="GLOB", help="left (or mono) images by glob")
     p.add_argument("--right", default=None, metavar="GLOB", help="right images by glob")
@@ -96,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
         from s2r.calib.bags import calibrate_stereo_bag
 
         result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                      max_dt_s=args.max_dt, every=args.every, refine_joint=args.refine_joint,
+                                      max_dt_s=args.max_dt, every=args.every,
+                                      fix_intrinsics=args.fix_intrinsics, swap=args.swap,
                                       **common)
     else:
         from s2r.calib.inputs import find_stereo_pairs
@@ -104,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
         result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                  refine_joint=args.refine_joint, **common)
+                                  fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
     dump_profile(result.profile, out, force=args.force)
     if args.report is not None:
         from s2r.calib.report import write_calibration_report

@@ -65,8 +65,10 @@ def register(sub: Any, profile_sub: Any) -> None:
     p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default="gazebo-classic",
                         help="pixel convention of the intrinsics (default gazebo-classic)")
     p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
-    p_from.add_argument("--optical-links", action="store_true",
-                        help="the camera links are optical frames already (z forward); default: by link name")
+    p_from.add_argument("--allow-bad-baseline", action="store_true",
+                        help="write a pair lint calls an error (baseline along the optical axis, right camera on "
+                        "the left) with a warning instead of refusing it")
+    p_from.add_argument("--optical-links", action="store_true", help=argparse.SUPPRESS)
     add_force(p_from)
     add_json(p_from)
     p_from.set_defaults(func=_cmd_from_urdf)
@@ -115,10 +117,13 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
     from s2r.sources.profile_builder import load_description_profile
 
     check_output_free(args.output, force=args.force)
+    if args.optical_links:
+        logger.warning("--optical-links is ignored: the optical axes come from the sensor poses (Gazebo renders "
+                       "along the camera frame's +x whatever the link is called)")
     profile = load_description_profile(
         args.file, convention=args.convention, left=args.left, right=args.right,
         xacro_args=parse_xacro_args(args.xacro_args + args.xacro_more), package_paths=args.package_path, name=args.name,
-        optical=True if args.optical_links else None)
+        allow_bad_baseline=args.allow_bad_baseline)
     dump_profile(profile, args.output, force=args.force)
     if args.json:
         print_json({"output": str(args.output), "profile": profile})

@@ -28,11 +28,12 @@ from s2r.fileio import StrictSafeLoader, parse_yaml, read_text_file, run_xml_par
 
 __all__ = ["MAX_MATRIX_ELEMENTS", "NodeValue", "read_filestorage"]
 
-NodeValue = str | float | NDArray[np.float64]
+NodeValue = str | float | NDArray[np.float64] | dict[str, Any]
 #: Largest matrix accepted (elements): far above any calibration matrix, far below a memory problem.
 MAX_MATRIX_ELEMENTS = 1_000_000
 _DT = re.compile(r"^\s*([1-4]?)\s*([ucwsifdhr])\s*$")
 _NARROW_FLOATS: dict[str, type[np.floating[Any]]] = {"f": np.float32, "h": np.float16}
+_NO_SPACE_FLOW = re.compile(r"^(\s*[A-Za-z_][\w.]*):([\[{])")
 _MATRIX_TAGS = ("tag:yaml.org,2002:opencv-matrix", "tag:yaml.org,2002:opencv-nd-matrix")
 
 
@@ -72,6 +73,9 @@ def _read_yaml(text: str, path: Path) -> dict[str, NodeValue | None]:
     lines = text.splitlines()
     if lines and lines[0].startswith("%YAML"):  # OpenCV writes "%YAML:1.0" (not YAML) or "%YAML 1.2"
         lines[0] = ""
+    # OpenCV's own parser accepts "data:[1, 2]" (no space after the colon; ORB-SLAM's EuRoC settings have it),
+    # YAML does not: put the space back before a flow sequence or map.
+    lines = [_NO_SPACE_FLOW.sub(r"\1: \2", line) for line in lines]
     try:
         data = parse_yaml("\n".join(lines), path=path, error=FormatError, loader=_FileStorageLoader)
     except FormatError as exc:
@@ -92,6 +96,8 @@ def _yaml_value(value: Any, path: Path, key: str) -> NodeValue | None:
         return _number(value)
     if isinstance(value, str):
         return value
+    if isinstance(value, dict):  # a plain map (VINS distortion_parameters, Kimera's {rows, cols, data} T_BS)
+        return {str(k): _yaml_value(v, path, f"{key}.{k}") for k, v in value.items()}
     if isinstance(value, list) and value and all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                  for v in value):
         return np.array([_number(v) for v in value], dtype=np.float64)
@@ -190,8 +196,8 @@ def _xml_value(element: ET.Element, path: Path) -> NodeValue | None:
                 raise FormatError("duplicate field", path=path, field=f"{element.tag}.{sub.tag}")
             fields[sub.tag] = (sub.text or "").strip()
         return _matrix(fields, path, element.tag)
-    if len(element):
-        return None  # a nested map or sequence: not a node s2r reads
+    if len(element):  # a nested map: its children by name (a sequence's unnamed "_" items are not read)
+        return {child.tag: _xml_value(child, path) for child in element if child.tag != "_"}
     text = (element.text or "").strip()
     if len(text) >= 2 and text[0] == text[-1] == '"':
         return text[1:-1]
