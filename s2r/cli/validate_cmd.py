@@ -31,7 +31,8 @@ def register(sub: Any) -> None:
                         help="write DIR/validation.html (self-contained); --report is kept as an alias")
     parser.add_argument("--tolerances", metavar="FILE", help="YAML file of tolerance overrides (key: number)")
     parser.add_argument("--quick", action="store_true",
-                        help="fewer board views (1x) and planes, no slanted plane (~15 s)")
+                        help="fewer board views (1x) and planes, no slanted plane (about 34 s of CPU time for two "
+                        "profiles)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered boards and textures")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: cores)")
     parser.add_argument("--preset", default="profile",

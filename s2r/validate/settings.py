@@ -44,10 +44,11 @@ class Settings:
                 "bins_m": [list(b) for b in self.bins_m]}
 
 
-#: Default settings (at most about 60 s for two profiles on 2 cores).
+#: Default settings (two profiles: about 2-3x the CPU time of QUICK, README gives measured figures).
 FULL = Settings(views=20, supersample=2, distances_m=(0.6, 0.9, 1.25, 1.75, 2.25, 2.75, 3.5, 4.5),
                 extra_scenes=(("slanted", (1.5,)),))
-#: ``--quick`` settings (at most about 15 s): fewer views (not supersampled) and planes, no slanted plane.
+#: ``--quick`` settings (two profiles: 34 s of CPU time measured on 2 cores): fewer views (not supersampled) and
+#: planes, no slanted plane.
 QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0))
 
 
