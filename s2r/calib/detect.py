@@ -37,7 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import S2RError
-from s2r.fileio import atomic_write_text, native_stderr_captured
+from s2r.fileio import atomic_write_text
+from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
 
 __all__ = [
@@ -162,13 +163,9 @@ def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Cor
 def _detect_item(item: DetectItem, pattern: tuple[int, int]) -> Detection:
     """Worker: read (if a path), detect, and describe the outcome."""
     if isinstance(item.source, Path):
-        with native_stderr_captured() as decoder_notes:  # no bare libjpeg/libpng lines on stderr
-            gray = cv2.imread(str(item.source), cv2.IMREAD_GRAYSCALE)
+        gray, reason = decode_image_file(item.source, cv2.IMREAD_GRAYSCALE)
         if gray is None:
-            return Detection(item.name, item.sha256, "unreadable", detail="not a readable image (corrupt or empty)")
-        if any("warn" not in note.lower() for note in decoder_notes):  # not a mere libpng/OpenCV warning
-            return Detection(item.name, item.sha256, "unreadable",
-                             detail=f"damaged image: the decoder reported {'; '.join(decoder_notes)[:120]!r}")
+            return Detection(item.name, item.sha256, "unreadable", detail=f"not a readable image: {reason}")
     else:
         gray = item.source
     size = (int(gray.shape[1]), int(gray.shape[0]))

@@ -10,7 +10,6 @@ from typing import Any
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.errors import CalibrationError
 from s2r.fileio import check_output_free, prepare_output_dir
-from s2r.formats.s2r_yaml import dump_profile
 
 __all__ = ["register"]
 
@@ -77,6 +76,8 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``s2r calibrate``; returns the exit code."""
+    from s2r.formats.s2r_yaml import dump_profile
+
     pattern = _check_args(args)
     out = check_output_free(args.output, force=args.force)
     if args.report is not None:

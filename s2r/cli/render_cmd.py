@@ -5,8 +5,16 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_distances, parse_pattern, print_json
-from s2r.registry import load_profile
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_json,
+    argparse_type,
+    load_profile,
+    parse_distances,
+    parse_pattern,
+    print_json,
+)
 
 __all__ = ["SCENE_CHOICES", "register"]
 

@@ -16,13 +16,13 @@ from s2r.cli._common import (
     add_force,
     add_json,
     argparse_type,
+    load_profile,
     parse_distances,
     parse_pattern,
     print_json,
 )
 from s2r.errors import ValidateError
 from s2r.fileio import prepare_output_dir
-from s2r.registry import load_profile
 
 __all__ = ["register"]
 
@@ -41,7 +41,8 @@ def register(sub: Any) -> None:
                         help="write DIR/validation.html (self-contained); --report is kept as an alias")
     parser.add_argument("--tolerances", metavar="FILE", help="YAML file of tolerance overrides (key: number)")
     parser.add_argument("--quick", action="store_true",
-                        help="fewer board views (1x) and planes, no slanted plane (~15 s)")
+                        help="fewer board views (1x) and planes, no slanted plane (about 34 s of CPU time for two "
+                        "profiles)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered boards and textures")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: cores)")
     parser.add_argument("--preset", default="profile",

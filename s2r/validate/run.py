@@ -80,8 +80,10 @@ class ValidationResult:
     @property
     def root_causes(self) -> list[RootCause]:
         """The failures grouped by the sim parameter that explains them (see :mod:`s2r.validate.causes`)."""
-        return group_failures(self.checks, self.params, self.edits, sim=self.roles.get("sim"),
-                              real=self.roles.get("real"), preset=self.settings.preset)
+        sim, real = self.roles.get("sim"), self.roles.get("real")
+        if sim is not None and real is not None:  # compared in the pixels the images obey, as the parameters are
+            sim, real = sim.in_opencv_pixels(), real.in_opencv_pixels()
+        return group_failures(self.checks, self.params, self.edits, sim=sim, real=real, preset=self.settings.preset)
 
     def as_dict(self) -> dict[str, Any]:
         """Every figure as plain JSON-ready data."""

@@ -49,9 +49,9 @@ class Settings:
                 "bins_m": [list(b) for b in self.bins_m]}
 
 
-#: Default settings (at most about 60 s for two profiles on 2 cores).
+#: Default settings (two profiles: about 2-3x the CPU time of QUICK; the README gives measured figures).
 FULL = Settings(views=20, supersample=2, distances_m=(0.6, 0.85, 1.2, 1.6, 2.2, 2.7, 3.3, 4.0, 4.6))
-#: ``--quick`` settings (at most about 15 s): fewer views (not supersampled) and planes.
+#: ``--quick`` settings: fewer views (not supersampled) and planes.
 QUICK = Settings(views=16, supersample=1, distances_m=(0.75, 1.5, 2.5, 4.0))
 
 
