@@ -27,6 +27,7 @@ def _pairs(rig: Rig, *, swap: bool = False) -> list[tuple[str, Detection, Detect
 
 
 def _calibrate(rig: Rig, **kw: object) -> StereoCalibration:
+    kw.setdefault("compare", False)
     return calibrate_stereo_detections(_pairs(rig, swap=bool(kw.pop("swap_input", False))), pattern=PATTERN,
                                        square_m=float(kw.pop("square_m", SQUARE_M)), name="t", **kw)  # type: ignore[arg-type]
 
@@ -124,3 +125,15 @@ def test_mismatched_pairs_are_named_and_dropped_and_too_many_refused() -> None:
     worse = [(n, a, pairs[(i + 1) % 6][2] if i < 6 else b) for i, (n, a, b) in enumerate(pairs)]
     with pytest.raises(CalibrationError, match="6 of 13 pairs disagree"):
         calibrate_stereo_detections(worse, pattern=PATTERN, square_m=SQUARE_M, name="t")
+
+
+def test_model_comparison_marks_the_chosen_model_and_warns_without_switching() -> None:
+    """Strong decentering (p1, p2 up to 3e-3) calibrated with k1k2: held-out views favour a tangential model."""
+    res = _calibrate(make_rig(61, views=12, tangential_max=3e-3), distortion="k1k2", compare=True)
+    assert res.models is not None and [s.model for s in res.models.scores if s.chosen] == ["k1k2"]
+    assert res.models.best in ("k1k2p1p2", "plumb_bob", "rational")
+    assert any("held-out views favour --distortion" in w for w in res.warnings)
+    assert res.profile.provenance.calibration is not None
+    assert res.profile.provenance.calibration.distortion_terms == "k1k2"  # no silent switching
+    figures = res.figures()["model_comparison"]
+    assert figures["best"] == res.models.best and len(figures["models"]) == 4
