@@ -19,6 +19,7 @@ from s2r.calib.lens import DEFAULT_LENS, lens_model
 from s2r.calib.models import ModelComparison, compare_models
 from s2r.calib.pair import PairSolution, solve_pair
 from s2r.calib.synth import board_object_points
+from s2r.calib.verdict import Verdict, stereo_verdict
 from s2r.calib.views import (
     MIN_VIEWS,
     check_sizes,
@@ -90,12 +91,15 @@ class StereoCalibration:
     detection_cached: int = 0
     solution: PairSolution | None = field(default=None, repr=False)
     models: ModelComparison | None = None
+    verdict: Verdict | None = None
+    view_paths: dict[str, tuple[Path, Path]] = field(default_factory=dict, repr=False)
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
         p = self.profile
         quality = p.provenance.calibration
         return {
+            "verdict": None if self.verdict is None else self.verdict.as_dict(),
             "profile": p.name,
             "left": _camera_figures(p.left), "right": _camera_figures(p.right),
             "translation_m": list(p.extrinsics.translation_m), "baseline_m": p.baseline_m,
@@ -219,6 +223,12 @@ def calibrate_stereo_detections(
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
+    heldout = None if models is None else next(m.heldout_px for m in models.scores if m.chosen)
+    verdict = stereo_verdict(
+        rms_px=sol.rms_px, heldout_px=heldout, epipolar_px=float("nan") if epi is None else epi,
+        baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
+        coverage=(cov_l.fraction, cov_r.fraction), model_warning=None if models is None else models.warning,
+        unobservable=sol.unobservable, mismatched=len(sol.mismatched))
     view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
                    for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(
@@ -227,7 +237,8 @@ def calibrate_stereo_detections(
         epipolar_rms_px=float("nan") if epi is None else epi, warnings=tuple(warnings),
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
-        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models)
+        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
+        verdict=verdict)
 
 
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
@@ -317,4 +328,5 @@ def calibrate_stereo(
     report(progress, 1, 1, "solving")
     first = result.used_names[0]
     idx = [n for n, _, _ in pairs].index(first)
-    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])))
+    view_paths = {n: (Path(a), Path(b)) for (n, _, _), a, b in zip(pairs, left_paths, right_paths, strict=True)}
+    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])), view_paths=view_paths)
