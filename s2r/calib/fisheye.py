@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -56,17 +57,40 @@ def _schur(Jg: FloatArray, Jv: FloatArray) -> FloatArray:
     return np.asarray(Jg.T @ Jg - B @ np.linalg.pinv(Jv.T @ Jv) @ B.T, np.float64)
 
 
+def _try(objs: list[FloatArray], imgs: list[FloatArray], size: tuple[int, int], K: FloatArray, D: FloatArray,
+         flags: int) -> tuple[float, Any, Any, Any, Any] | None:
+    try:
+        out = cv2.fisheye.calibrate(objs, imgs, size, K.copy(), D.copy(), flags=flags, criteria=_CRITERIA)
+    except cv2.error:
+        return None
+    rms = float(out[0])
+    return (rms, *out[1:]) if np.isfinite(rms) else None
+
+
+def _calibrate_staged(objs: list[FloatArray], imgs: list[FloatArray], size: tuple[int, int]
+                      ) -> tuple[Any, Any, Any, Any]:
+    """``cv2.fisheye.calibrate`` from OpenCV's own start, and from a start solved with k2..k4 fixed (its
+    free solve can run off to a wrong minimum on few or small views); the lower RMS wins."""
+    K0 = np.array([[size[0] / np.pi, 0, (size[0] - 1) / 2], [0, size[0] / np.pi, (size[1] - 1) / 2], [0, 0, 1.0]])
+    tries = [_try(objs, imgs, size, K0, np.zeros(4), _FLAGS)]
+    staged = _try(objs, imgs, size, K0, np.zeros(4),
+                  _FLAGS | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_FIX_K4)
+    if staged is not None:
+        tries.append(_try(objs, imgs, size, np.asarray(staged[1], np.float64), np.asarray(staged[2], np.float64),
+                          _FLAGS | cv2.CALIB_USE_INTRINSIC_GUESS))
+    ok = [t for t in tries if t is not None]
+    if not ok:
+        raise CalibrationError("OpenCV fisheye calibration failed on every start",
+                               hint="add views with the board at different angles and distances")
+    best = min(ok, key=lambda t: t[0])
+    return best[1], best[2], best[3], best[4]
+
+
 def solve_mono_fisheye(obj: Sequence[Points], img: Sequence[Points], size: tuple[int, int]) -> FisheyeMono:
     """Calibrate one fisheye camera from board views (``size`` = (width, height) px)."""
     objs = [np.asarray(o, np.float64).reshape(1, -1, 3) for o in obj]
     imgs = [np.asarray(p, np.float64).reshape(1, -1, 2) for p in img]
-    K0 = np.array([[size[0] / np.pi, 0, (size[0] - 1) / 2], [0, size[0] / np.pi, (size[1] - 1) / 2], [0, 0, 1.0]])
-    try:
-        _rms, K_cv, D_cv, rvecs, tvecs = cv2.fisheye.calibrate(objs, imgs, size, K0, np.zeros(4), flags=_FLAGS,
-                                                                criteria=_CRITERIA)
-    except cv2.error as exc:
-        raise CalibrationError(f"OpenCV fisheye calibration failed: {str(exc).strip().splitlines()[-1]}",
-                               hint="add views with the board at different angles and distances") from None
+    K_cv, D_cv, rvecs, tvecs = _calibrate_staged(objs, imgs, size)
     K: FloatArray = np.asarray(K_cv, np.float64)
     D: FloatArray = np.asarray(D_cv, np.float64).reshape(4)
     rv = tuple(np.asarray(r, np.float64).reshape(3) for r in rvecs)

@@ -136,6 +136,8 @@ def calibrate_stereo_target_detections(
         fit = fit_camera(CameraViews([obs[k] for k in index], size, lens, distortion),  # type: ignore[misc]
                          max_error_px=max_error_px, camera=side)
         fits.append(fit)
+        for j, k in enumerate(index):
+            obs[k] = fit.views[j]
         keeps.append({index[j]: pos for pos, j in enumerate(fit.keep)})
         dropped += fit.outliers
     views, reordered = pair_views(names, obs_l, obs_r, keeps[0], keeps[1], target)

@@ -56,6 +56,9 @@ AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 #: ``--lens`` choices: the projection model behind the distortion terms.
 LENSES = ("pinhole", "fisheye")
 _MAX_ROUNDS = 5
+#: A corner is an outlier beyond this multiple of the median corner error (at least the floor, px).
+CORNER_OUTLIER_FACTOR = 4.0
+CORNER_OUTLIER_FLOOR_PX = 0.3
 
 
 @dataclass(frozen=True)
@@ -92,13 +95,15 @@ def target_pattern(target: AnyTarget) -> tuple[tuple[int, int], float]:
 
 @dataclass(frozen=True)
 class MonoFit:
-    """One camera's solve: kept view indices, solution, intrinsics covariance (fisheye), threshold, outliers."""
+    """One camera's solve: kept view indices, solution, intrinsics covariance (fisheye), threshold, outliers
+    and the views as solved (outlier corners removed)."""
 
     keep: list[int]
     solution: MonoSolution
     cov: NDArray[np.float64] | None
     threshold: float
     outliers: list[DroppedView]
+    views: list[Observation]
 
 
 @dataclass(frozen=True)
@@ -137,7 +142,41 @@ def fit_camera(cv: CameraViews, *, max_error_px: float | None, camera: str) -> M
                      for j in bad]
         keep = [k for j, k in enumerate(keep) if j not in set(bad)]
     assert thr is not None
-    return MonoFit(keep, sol, cov, thr, outliers)
+    pruned = _prune_corners(cv, keep, sol)
+    if pruned is not None:
+        cv.views[:] = pruned
+        sol, cov = _solve(cv, keep)
+    return MonoFit(keep, sol, cov, thr, outliers, list(cv.views))
+
+
+def corner_residuals(sol: MonoSolution, obs: Observation, lens: str, j: int) -> NDArray[np.float64]:
+    """Reprojection error (N,) px of each corner of ``obs``, view ``j`` of the solution."""
+    obj = obs.obj.astype(np.float64).reshape(-1, 1, 3)
+    if lens == "fisheye":
+        proj, _ = cv2.fisheye.projectPoints(obj, sol.rvecs[j].reshape(3, 1), sol.tvecs[j].reshape(3, 1), sol.K,
+                                            sol.D.reshape(4, 1))
+    else:
+        proj, _ = cv2.projectPoints(obj, sol.rvecs[j], sol.tvecs[j], sol.K, sol.D)
+    return np.asarray(np.linalg.norm(np.asarray(proj).reshape(-1, 2) - obs.img.reshape(-1, 2), axis=1), np.float64)
+
+
+def _prune_corners(cv: CameraViews, keep: Sequence[int], sol: MonoSolution) -> list[Observation] | None:
+    """The views without corners whose error exceeds ``CORNER_OUTLIER_FACTOR`` x the median corner error
+    (at least ``CORNER_OUTLIER_FLOOR_PX``): a corner pulled by a marker edge or a neighbour spoils a good
+    view; None when no corner is that far off."""
+    res = {k: corner_residuals(sol, cv.views[k], cv.lens, j) for j, k in enumerate(keep)}
+    limit = max(CORNER_OUTLIER_FACTOR * float(np.median(np.concatenate(list(res.values())))),
+                CORNER_OUTLIER_FLOOR_PX)
+    if not any(bool(np.any(r > limit)) for r in res.values()):
+        return None
+    views = list(cv.views)
+    for k, r in res.items():
+        ok = r <= limit
+        o = views[k]
+        if not ok.all() and usable_corners(o.ids[ok], o.obj[ok].astype(np.float64)):
+            views[k] = Observation(o.name, o.ids[ok], o.obj[ok], o.img[ok])
+    log.info("dropped corners farther than %.2f px from the first solve's projection", limit)
+    return views
 
 
 def to_camera(sol: MonoSolution, size: tuple[int, int], *, lens: str, distortion: str) -> Camera:
