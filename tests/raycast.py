@@ -256,20 +256,27 @@ def _rot(rv: F64) -> F64:
     return np.asarray(cv2.Rodrigues(np.asarray(rv, np.float64).reshape(3, 1))[0], np.float64)
 
 
-def pinhole_rig(target: Target, name: str) -> Rig:
-    """640x480 pinhole plumb_bob rig, 8 cm baseline, slightly rotated right camera."""
+def _scaled(lens: Lens, s: float) -> Lens:
+    """The lens at ``s`` x the resolution (K scaled about pixel edges)."""
+    return Lens(round(lens.width * s), round(lens.height * s), lens.fx * s, lens.fy * s, s * (lens.cx + 0.5) - 0.5,
+                s * (lens.cy + 0.5) - 0.5, lens.model, lens.dist)
+
+
+def pinhole_rig(target: Target, name: str, scale: float = 1.0) -> Rig:
+    """640x480 (x ``scale``) pinhole plumb_bob rig, 8 cm baseline, slightly rotated right camera."""
     lens_l = Lens(640, 480, 520.0, 521.5, 323.4, 236.8, "plumb_bob", (-0.21, 0.06, 0.0004, -0.0003, 0.0))
     lens_r = Lens(640, 480, 518.2, 519.1, 317.9, 243.1, "plumb_bob", (-0.19, 0.05, -0.0002, 0.0002, 0.0))
     R = _rot(np.radians([0.4, -0.7, 0.3]))
-    return Rig(name, lens_l, lens_r, R, -R @ np.array([0.08, 0.001, -0.0005]), target)
+    return Rig(name, _scaled(lens_l, scale), _scaled(lens_r, scale), R, -R @ np.array([0.08, 0.001, -0.0005]), target)
 
 
-def fisheye_rig(target: Target, name: str) -> Rig:
-    """T265-like 848x800 equidistant pair (about 160 deg diagonal), 6.4 cm baseline."""
+def fisheye_rig(target: Target, name: str, scale: float = 1.0) -> Rig:
+    """T265-like 848x800 (x ``scale``) equidistant pair (about 160 deg diagonal), 6.4 cm baseline."""
     lens_l = Lens(848, 800, 286.2, 286.9, 425.3, 398.1, "equidistant", (-0.0074, 0.043, -0.041, 0.0076))
     lens_r = Lens(848, 800, 285.1, 285.6, 421.6, 403.7, "equidistant", (-0.0061, 0.041, -0.039, 0.0072))
     R = _rot(np.radians([0.3, 0.5, -0.2]))
-    return Rig(name, lens_l, lens_r, R, -R @ np.array([0.064, -0.0004, 0.0003]), target)
+    return Rig(name, _scaled(lens_l, scale), _scaled(lens_r, scale), R, -R @ np.array([0.064, -0.0004, 0.0003]),
+               target)
 
 
 def _visible(lens: Lens, X: F64, margin: float = 4.0) -> NDArray[np.bool_]:
