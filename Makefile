@@ -36,7 +36,7 @@ test-browser: $(STAMP)
 # The sample "recorded" calibration set of a simulated D435 unit (calibration/README.md).
 calibration-sample: $(STAMP)
 	$(BIN)/s2r render boards calibration/d435_unit_truth.yaml --views 24 --seed 7 --noise 2 \
-		--out calibration/d435_unit_sample --force
+		-o calibration/d435_unit_sample --force
 
 # Rebuild profiles/sim/*.yaml from urdf/ (a test checks the shipped files match).
 profiles: $(STAMP)

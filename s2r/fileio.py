@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import io
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any
+from xml.parsers import expat
 
 import numpy as np
 import yaml
@@ -15,6 +18,7 @@ import yaml
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
+    "StrictSafeLoader",
     "atomic_write_bytes",
     "atomic_write_npy",
     "atomic_write_text",
@@ -23,29 +27,102 @@ __all__ = [
     "parse_yaml",
     "prepare_output_dir",
     "read_text_file",
+    "run_xml_parser",
+    "safe_xml_parser",
     "sha256_file",
 ]
 
 
+def _lstat(path: Path) -> os.stat_result | None:
+    """``os.lstat`` of ``path`` (the link itself, never its target); None when nothing is there.
+
+    A path whose parent is a file ("out.png/disparity.npy") is refused here, naming that parent.
+    """
+    try:
+        return os.lstat(path)
+    except FileNotFoundError:
+        return None
+    except NotADirectoryError:
+        parent = next((p for p in path.parents if p.exists() and not p.is_dir()), path.parent)
+        raise S2RError("is a file, expected a folder", path=parent, hint="choose an output folder") from None
+    except OSError as exc:
+        raise S2RError(f"cannot inspect output: {exc.strerror}", path=path, hint="choose another location") from None
+
+
+def _refuse_special(out: Path, st: os.stat_result) -> None:
+    """Refuse a symlink, folder, device node, FIFO or socket where a regular output file should be."""
+    mode = st.st_mode
+    if stat.S_ISLNK(mode):
+        raise OutputExistsError("is a symbolic link; s2r does not write through links, nothing was written",
+                                path=out, hint="give the link's target path itself, or another name")
+    if stat.S_ISDIR(mode):
+        raise OutputExistsError("is a folder, expected a file; nothing was written", path=out,
+                                hint="give a file name inside it")
+    if not stat.S_ISREG(mode):
+        raise OutputExistsError("is not a regular file (a device, FIFO or socket); nothing was written, even "
+                                "with --force", path=out, hint="choose a regular file name")
+
+
 def check_output_free(path: str | Path, *, force: bool) -> Path:
-    """Raise :class:`OutputExistsError` if ``path`` exists and ``force`` is false; return it as a Path."""
+    """Return ``path`` as a Path if s2r may write a regular file there; :class:`OutputExistsError` otherwise.
+
+    Refused always: a symlink, a folder, a device node (``/dev/null``), a FIFO or a socket at ``path``
+    (``--force`` never replaces them), and a path under a file. Refused unless ``force``: an existing file.
+    """
     out = Path(path)
-    if out.exists() and not force:
+    st = _lstat(out)
+    if st is None:
+        return out
+    _refuse_special(out, st)
+    if not force:
         raise OutputExistsError("already exists; nothing was overwritten", path=out, hint="pass --force to replace it")
     return out
 
 
-def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and an atomic rename.
+def _publish(tmp_name: str, out: Path, *, force: bool) -> None:
+    """Move the finished temporary file to ``out``: exclusively (hard link) unless ``force``, else by rename.
 
-    A crash mid-write leaves the old file (or no file), never a truncated one. Refuses to replace an
-    existing file unless ``force``.
+    Without ``force`` the link fails when ``out`` appeared meanwhile (another run), so of two racing runs at
+    most one succeeds. Filesystems without hard links fall back to claiming the name with ``O_EXCL`` first.
+    """
+    if force:
+        st = _lstat(out)
+        if st is not None:
+            _refuse_special(out, st)  # it may have changed since the first check
+        os.replace(tmp_name, out)
+        return
+    try:
+        os.link(tmp_name, out)
+    except FileExistsError:
+        raise OutputExistsError("already exists (written by another run meanwhile?); nothing was overwritten",
+                                path=out, hint="pass --force to replace it") from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
+            raise
+        try:
+            os.close(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600))
+        except FileExistsError:
+            raise OutputExistsError("already exists (written by another run meanwhile?); nothing was "
+                                    "overwritten", path=out, hint="pass --force to replace it") from None
+        os.replace(tmp_name, out)
+        return
+    os.unlink(tmp_name)
+
+
+def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, published atomically.
+
+    A crash mid-write leaves the old file (or no file), never a truncated one. Refuses (see
+    :func:`check_output_free`) symlinks and non-regular files always, an existing file unless ``force``; without
+    ``force`` the file is created exclusively, so two racing runs cannot both write it.
     """
     out = check_output_free(path, force=force)
     parent = out.parent if str(out.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
+    except FileExistsError:
+        raise S2RError("is a file, expected a folder", path=parent, hint="choose an output folder") from None
     except OSError as exc:
         raise S2RError(f"cannot write: {exc.strerror}", path=out, hint="choose a writable location") from exc
     try:
@@ -57,7 +134,7 @@ def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) ->
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        os.replace(tmp_name, out)
+        _publish(tmp_name, out, force=force)
     except BaseException:
         Path(tmp_name).unlink(missing_ok=True)
         raise
@@ -70,11 +147,18 @@ def atomic_write_text(path: str | Path, text: str, *, force: bool = False) -> Pa
 
 
 def check_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Refuse (creating nothing) a non-folder, or a folder that holds files unless ``force``; return the path."""
+    """Refuse (creating nothing) a symlink or non-folder, or a folder that holds files unless ``force``."""
     out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError("exists and is not a folder", path=out, hint="choose another output folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
+    st = _lstat(out)
+    if st is None:
+        return out
+    if stat.S_ISLNK(st.st_mode):
+        raise OutputExistsError("is a symbolic link; s2r does not write through links", path=out,
+                                hint="give the link's target folder itself, or another name")
+    if not stat.S_ISDIR(st.st_mode):
+        raise OutputExistsError("is a file, expected a folder; nothing was written", path=out,
+                                hint="choose another output folder")
+    if any(out.iterdir()) and not force:
         raise OutputExistsError(
             "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"
         )
@@ -82,10 +166,19 @@ def check_output_dir(path: str | Path, *, force: bool) -> Path:
 
 
 def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable."""
+    """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable.
+
+    Without ``force`` a folder that did not exist is created exclusively: when another run creates it between
+    the check and the ``mkdir``, this one stops instead of sharing it.
+    """
     out = check_output_dir(path, force=force)
+    existed = _lstat(out) is not None
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.mkdir(exist_ok=force or existed)
+    except FileExistsError:
+        raise OutputExistsError("was created by another run meanwhile; nothing was overwritten", path=out,
+                                hint="pass --force to reuse it") from None
     except OSError as exc:
         raise S2RError(f"cannot create folder: {exc.strerror}", path=out, hint="choose a writable location") from exc
     if not os.access(out, os.W_OK):
@@ -122,10 +215,39 @@ def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str
         raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
 
 
-def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RError] = S2RError) -> Any:
-    """Parse YAML text with the safe loader; ``error`` naming the file and line when it is malformed."""
+class StrictSafeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, stricter: a key repeated in one mapping is an error (naming the key and its line,
+    instead of the last one silently winning), and the object-building tags ``!!binary !!set !!omap !!pairs
+    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        """The mapping of ``node``; ConstructorError on a duplicate key."""
+        seen: set[Any] = set()
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge" or not isinstance(key_node, yaml.ScalarNode):
+                continue
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (each key may appear once)", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)  # type: ignore[no-any-return]
+
+    def refuse_tag(self, node: yaml.Node) -> Any:
+        """Constructor for tags that build objects: always an error."""
+        raise yaml.constructor.ConstructorError(None, None, f"tag {node.tag!r} is not allowed", node.start_mark)
+
+
+for _tag in ("binary", "set", "omap", "pairs"):
+    StrictSafeLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", StrictSafeLoader.refuse_tag)
+
+
+def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RError] = S2RError,
+               loader: type[StrictSafeLoader] = StrictSafeLoader) -> Any:
+    """Parse YAML text with :class:`StrictSafeLoader` (or a subclass); ``error`` naming the file and line when
+    it is malformed, repeats a key or uses a refused tag."""
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=loader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else None
@@ -134,3 +256,35 @@ def parse_yaml(text: str, *, path: str | Path | None = None, error: type[S2RErro
     except (ValueError, TypeError, AttributeError, OverflowError, RecursionError) as exc:
         # the safe loader's int/float/timestamp constructors raise plain errors on odd scalars (2026-13-45)
         raise error(f"malformed YAML: {exc}", path=path) from None
+
+
+class _RefusedXml(Exception):
+    """Raised from inside expat when a document declares a DOCTYPE or entities."""
+
+
+def _refuse_doctype(*_: Any) -> None:
+    raise _RefusedXml("DOCTYPE")
+
+
+def safe_xml_parser() -> Any:
+    """An expat parser that refuses any ``<!DOCTYPE>`` (so no DTD, no entity declarations, no entity
+    amplification, no external entities). Parse with :func:`run_xml_parser` to get one-line errors."""
+    parser = expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = _refuse_doctype
+    parser.EntityDeclHandler = _refuse_doctype
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    return parser
+
+
+def run_xml_parser(parser: Any, text: str, *, path: str | Path, error: type[S2RError] = S2RError) -> None:
+    """Feed ``text`` to a :func:`safe_xml_parser`; ``error`` (one line, file and line) when it is refused or
+    malformed."""
+    try:
+        parser.Parse(text, True)
+    except _RefusedXml:
+        raise error("XML with a <!DOCTYPE> (DTD or entity declarations) is refused", path=path,
+                    field=f"line {parser.CurrentLineNumber}",
+                    hint="remove the <!DOCTYPE ...> block; these files never need one") from None
+    except expat.ExpatError as exc:
+        raise error(f"malformed XML: {expat.ErrorString(exc.code)} at column {exc.offset + 1}", path=path,
+                    field=f"line {exc.lineno}", hint="fix the XML syntax there (unclosed or mismatched tag?)") from None

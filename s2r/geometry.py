@@ -1,4 +1,4 @@
-"""Frames, rotations and rigid transforms (numpy/scipy only).
+"""Frames, rotations and rigid transforms (numpy; scipy imported where a conversion needs it).
 
 Naming: ``T_a_b`` is the 4x4 pose of frame ``b`` expressed in frame ``a`` (it maps points from ``b``
 coordinates to ``a`` coordinates: ``x_a = T_a_b @ x_b``). Translations are in metres.
@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "ORTHONORMAL_TOL",
     "R_LINK_OPTICAL",
     "T_LINK_OPTICAL",
+    "baseline_layout_problem",
     "check_matrix",
     "check_rotation",
     "check_vector",
@@ -68,18 +68,28 @@ def check_rotation(value: ArrayLike, *, name: str = "R", tol: float = ORTHONORMA
 
 def rotation_from_rpy(rpy: ArrayLike) -> FloatArray:
     """URDF/SDF roll-pitch-yaw (radians, about FIXED axes x, y, z) to a 3x3 rotation matrix."""
+    from scipy.spatial.transform import Rotation  # scipy loads on first use: the CLI starts without it
+
     angles = check_vector(rpy, 3, name="rpy")
     return np.asarray(Rotation.from_euler("xyz", angles).as_matrix(), dtype=np.float64)
 
 
 def rpy_from_rotation(rot: ArrayLike) -> FloatArray:
     """Inverse of :func:`rotation_from_rpy`: fixed-axis roll, pitch, yaw in radians."""
+    from scipy.spatial.transform import Rotation
+
     return np.asarray(Rotation.from_matrix(check_rotation(rot)).as_euler("xyz"), dtype=np.float64)
 
 
 def rotation_angle_rad(rot: ArrayLike) -> float:
-    """Angle of a rotation matrix about its axis, in radians (0 for the identity)."""
-    return float(np.linalg.norm(Rotation.from_matrix(check_rotation(rot)).as_rotvec()))
+    """Angle of a rotation matrix about its axis, in radians (0 for the identity).
+
+    ``atan2(|v|, trace(R) - 1)`` with ``v = (R32 - R23, R13 - R31, R21 - R12) = 2 sin(angle) axis`` and
+    ``trace(R) - 1 = 2 cos(angle)``: accurate at small and large angles, without importing scipy.
+    """
+    R = check_rotation(rot)
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return float(np.arctan2(np.linalg.norm(v), np.trace(R) - 1.0))
 
 
 def make_transform(rot: ArrayLike, translation_m: ArrayLike) -> FloatArray:
@@ -128,3 +138,27 @@ def as_plain(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def baseline_layout_problem(position_m: ArrayLike) -> tuple[str, str] | None:
+    """Why a right camera at ``position_m`` (metres, in the LEFT optical frame: x right, y down, z forward)
+    makes no usable stereo pair, as ``(code, message)``; None when it is usable.
+
+    One rule for lint, ``from-urdf`` and every export: ``baseline-axis`` when the baseline is zero or its
+    forward component is at least as large as its length / sqrt(2) (no disparity), ``baseline-side`` when
+    the "right" camera sits to the LEFT by at least that much (negative disparities).
+    """
+    t = check_vector(position_m, 3, name="right camera position")
+    b = float(np.linalg.norm(t))
+    if b < 1e-6:
+        return "baseline-axis", "zero baseline: both cameras sit at the same place"
+    tx, _, tz = (float(v) for v in t)
+    if abs(tz) >= b * np.sqrt(0.5):
+        where = "behind" if tz < 0 else "in front of"
+        return "baseline-axis", (f"baseline along the optical axis: the right camera is {abs(tz) * 100:.1f} cm {where} "
+                                 f"the left one along its viewing axis ({abs(tx) * 100:.1f} cm sideways): no stereo "
+                                 "disparity")
+    if tx < 0 and abs(tx) >= b * np.sqrt(0.5):
+        return "baseline-side", (f"the 'right' camera is {abs(tx) * 100:.1f} cm to the LEFT of the left camera "
+                                 "(disparities would be negative)")
+    return None

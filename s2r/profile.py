@@ -372,9 +372,12 @@ class StereoProfile(_Model):
         return self.left.fx_px * self.baseline_m / depth_m
 
     def num_disparities_for(self, min_depth_m: float | None = None) -> int:
-        """Disparity count that sees down to ``min_depth_m`` (default the matcher's): fx B / z, up to 16."""
+        """Disparity count that sees down to ``min_depth_m`` (default the matcher's): fx B / z + 1, up to 16.
+
+        The largest disparity of a range is ``min_disparity + num_disparities - 1`` (as :meth:`depth_range_m`).
+        """
         z_min = self.matcher.min_depth_m if min_depth_m is None else min_depth_m
-        needed = self.disparity_px(z_min) - self.matcher.min_disparity
+        needed = self.disparity_px(z_min) - self.matcher.min_disparity + 1
         return int(max(16, math.ceil(needed / 16.0) * 16))
 
     def depth_range_m(self, matcher: MatcherSettings | None = None) -> tuple[float, float]:

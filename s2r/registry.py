@@ -5,14 +5,17 @@
 
 from __future__ import annotations
 
+import difflib
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 from s2r.errors import ProfileError
 from s2r.formats.detect import load_any
 from s2r.profile import StereoProfile
 
-__all__ = ["PROFILE_ENV", "PROFILE_PATH_ENV", "SHIPPED_PROFILES", "list_profiles", "load_profile", "resolve_profile"]
+__all__ = ["PROFILE_ENV", "PROFILE_PATH_ENV", "SHIPPED_PROFILES", "did_you_mean", "list_profiles", "load_profile",
+           "resolve_profile"]
 
 PROFILE_ENV = "S2R_PROFILE"
 PROFILE_PATH_ENV = "S2R_PROFILE_PATH"
@@ -54,14 +57,28 @@ def resolve_profile(name_or_path: str | Path | None = None) -> Path:
     if isinstance(name_or_path, Path) or _looks_like_path(text):
         path = Path(text)
         if not path.exists():
-            raise ProfileError("file not found", path=path, hint="check the path")
+            guess = did_you_mean(path.stem, list_profiles()) if len(path.parts) == 1 else ""
+            raise ProfileError("file not found" + (guess if "did you mean" in guess else ""), path=path,
+                               hint="check the path")
         return path
     known = list_profiles()
     if text not in known:
-        names = ", ".join(sorted(known)) or "none"
-        raise ProfileError(f"unknown profile name {text!r}; known profiles: {names}",
-                           hint=f"pass a file path or add a folder to {PROFILE_PATH_ENV}")
+        raise ProfileError(f"unknown profile name {text!r}{did_you_mean(text, known)}",
+                           hint=f"`s2r profile list` shows them all; pass a file path or add a folder to "
+                           f"{PROFILE_PATH_ENV}")
     return known[text]
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str:
+    """``"; did you mean 'x'?"`` for the closest known names (difflib, case-insensitive), else the known names."""
+    names = sorted(known)
+    lowered = {n.lower(): n for n in names}
+    close = [lowered[m] for m in difflib.get_close_matches(name.lower(), list(lowered), n=1, cutoff=0.6)]
+    if not close:  # a unique prefix or substring ("d435", "gazebo") is as good a guess
+        close = [n for n in names if name.lower() in n.lower()][:3]
+    if close:
+        return "; did you mean " + " or ".join(repr(n) for n in close) + "?"
+    return f"; known profiles: {', '.join(names) or 'none'}"
 
 
 def load_profile(name_or_path: str | Path | None = None) -> StereoProfile:

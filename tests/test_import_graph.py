@@ -18,10 +18,11 @@ LAYERS: dict[str, int] = {
     "formats": 4, "sources": 4,
     "registry": 5, "htmlreport": 5,
     "calib": 6, "depth": 6, "render": 6,
-    "compat": 7, "validate": 7,
-    "cli": 8, "__main__": 9, "__init__": 9,
+    "compat": 7, "quality": 7,
+    "validate": 8,
+    "cli": 9, "__main__": 10, "__init__": 10,
 }
-CV2_HOMES = {"calib", "depth", "render", "rectification", "formats.opencv", "formats.ros", "validate"}
+CV2_HOMES = {"calib", "depth", "render", "rectification", "formats.opencv", "formats.ros", "validate", "quality"}
 PYBULLET_HOMES = {"render"}
 
 

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
+from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
@@ -135,7 +136,8 @@ def _check_topics(reader: Any, bag: Path, left_topic: str, right_topic: str) -> 
 def calibrate_stereo_bag(
     bag: Path, *, left_topic: str, right_topic: str, max_dt_s: float = 0.01, every: int = 1,
     pattern: tuple[int, int] = (9, 6), square_m: float = 0.025, name: str = "calibrated",
-    distortion: str = "k1k2", max_error_px: float | None = None, refine_joint: bool = False,
+    distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
+    swap: bool = False,
     jobs: int | None = None, cache_dir: Path | None = None, progress: ProgressCallback | None = None,
     target: AnyTarget | None = None, lens: str = "pinhole",
 ) -> StereoCalibration:
@@ -177,11 +179,13 @@ def calibrate_stereo_bag(
 
         result = calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
-            refine_joint=refine_joint, sources=_bag_sources(bag))
+            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag))
         sample = next((samples[n] for n in result.used_names if n in samples), None)
-        return replace(result, sample_images=sample)
+        return replace(result, sample_images=sample if sample is None or not swap else (sample[1], sample[0]))
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        refine_joint=refine_joint, sources=_bag_sources(bag))
+        fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag))
     sample = next((samples[n] for n in result.used_names if n in samples), None)
+    if sample is not None and swap:
+        sample = (sample[1], sample[0])
     return replace(result, sample_images=sample)

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
+from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.solve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.stereo import make_camera
 from s2r.calib.synth import board_object_points
@@ -83,7 +84,7 @@ def _solve_with_outliers(names: list[str], corners: list[Corners], obj: Corners,
 
 
 def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), square_m: float = 0.025,
-                   name: str = "calibrated", distortion: str = "k1k2", max_error_px: float | None = None,
+                   name: str = "calibrated", distortion: str = DEFAULT_LENS, max_error_px: float | None = None,
                    jobs: int | None = None, cache_dir: Path | None = None,
                    progress: ProgressCallback | None = None) -> MonoCalibration:
     """Calibrate one camera from chessboard image files; same detection, outlier and coverage rules as

@@ -22,6 +22,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.lens import DEFAULT_LENS, LENS_MODELS, LensModel
+from s2r.calib.observations import BoardObservation
 from s2r.errors import CalibrationError
 
 __all__ = [
@@ -32,21 +34,17 @@ __all__ = [
     "distortion_flags",
     "outlier_threshold",
     "solve_mono",
+    "solve_mono_observations",
     "solve_stereo",
 ]
 
 FloatArray = NDArray[np.float64]
 Points = NDArray[np.float32]
 
-#: ``--distortion`` choices: OpenCV flags and the number of coefficients kept.
-DISTORTION_CHOICES: dict[str, tuple[int, int]] = {
-    "k1k2": (cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST, 5),
-    "plumb_bob": (0, 5),
-    "rational": (cv2.CALIB_RATIONAL_MODEL, 8),
-}
+#: ``--distortion`` choices (see :mod:`s2r.calib.lens`): OpenCV flags and the number of coefficients kept.
+DISTORTION_CHOICES: dict[str, tuple[int, int]] = {k: (m.cv_flags, m.n_coef) for k, m in LENS_MODELS.items()}
 #: Indices of the free distortion coefficients per choice.
-FREE_DISTORTION: dict[str, tuple[int, ...]] = {
-    "k1k2": (0, 1), "plumb_bob": (0, 1, 2, 3, 4), "rational": (0, 1, 2, 3, 4, 5, 6, 7)}
+FREE_DISTORTION: dict[str, tuple[int, ...]] = {k: m.free for k, m in LENS_MODELS.items()}
 _CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-9)
 
 
@@ -89,7 +87,7 @@ class StereoSolution:
 
 
 def solve_mono(obj: Sequence[Points], img: Sequence[Points], size: tuple[int, int], *,
-               distortion: str = "k1k2") -> MonoSolution:
+               distortion: str = DEFAULT_LENS) -> MonoSolution:
     """Calibrate one camera from board views (``size`` = (width, height) px)."""
     flags = distortion_flags(distortion)
     ncoef = DISTORTION_CHOICES[distortion][1]
@@ -103,6 +101,7 @@ def solve_mono(obj: Sequence[Points], img: Sequence[Points], size: tuple[int, in
     D = np.asarray(D, np.float64).reshape(-1)[:ncoef]
     std_i = np.asarray(std_i, np.float64).reshape(-1)
     std = np.concatenate([std_i[:4], std_i[4:4 + ncoef]])
+    std[~np.isfinite(std)] = np.inf  # OpenCV gives NaN for parameters the views do not constrain
     return MonoSolution(K=np.asarray(K, np.float64), D=D, rms_px=float(rms),
                         per_view_px=np.asarray(per_view, np.float64).reshape(-1), std=std,
                         rvecs=tuple(np.asarray(r, np.float64).reshape(3) for r in rvecs),
@@ -110,7 +109,7 @@ def solve_mono(obj: Sequence[Points], img: Sequence[Points], size: tuple[int, in
 
 
 def solve_stereo(obj: Sequence[Points], img_l: Sequence[Points], img_r: Sequence[Points], size: tuple[int, int],
-                 left: MonoSolution, right: MonoSolution, *, distortion: str = "k1k2",
+                 left: MonoSolution, right: MonoSolution, *, distortion: str = DEFAULT_LENS,
                  refine_joint: bool = False) -> StereoSolution:
     """Solve the extrinsics with both cameras' intrinsics fixed (or refined jointly with ``refine_joint``)."""
     flags = distortion_flags(distortion)
@@ -172,7 +171,7 @@ def _schur(Jg: FloatArray, Jv: FloatArray) -> FloatArray:
 
 
 def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: Sequence[Points],
-                        stereo: StereoSolution, *, distortion: str = "k1k2",
+                        stereo: StereoSolution, *, distortion: str = DEFAULT_LENS,
                         fixed_intrinsics: bool = True) -> tuple[FloatArray, float]:
     """Covariance (3x3, m^2) of the translation T and the residual sigma (px) of the stereo problem.
 
@@ -220,3 +219,10 @@ def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: S
     cov_k[ni:, ni:] = sigma2 * np.linalg.pinv(A_r)
     cov_e = sigma2 * A_ee_inv + S @ cov_k @ S.T
     return np.asarray(cov_e[3:, 3:], np.float64), float(np.sqrt(sigma2))
+
+
+def solve_mono_observations(views: Sequence[BoardObservation], size: tuple[int, int],
+                            lens: LensModel) -> MonoSolution:
+    """:func:`solve_mono` of one camera's observations (views may show different corner subsets)."""
+    return solve_mono([v.obj.astype(np.float32) for v in views], [v.img.astype(np.float32) for v in views], size,
+                      distortion=lens.name)

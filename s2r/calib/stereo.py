@@ -15,19 +15,11 @@ from numpy.typing import NDArray
 
 from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.solve import (
-    DISTORTION_CHOICES,
-    MonoSolution,
-    StereoSolution,
-    baseline_covariance,
-    outlier_threshold,
-    solve_mono,
-    solve_stereo,
-)
+from s2r.calib.lens import DEFAULT_LENS, lens_model
+from s2r.calib.pair import PairSolution, solve_pair
 from s2r.calib.synth import board_object_points
 from s2r.calib.views import (
     MIN_VIEWS,
-    StereoViews,
     check_sizes,
     no_board_error,
     select_diverse,
@@ -54,8 +46,6 @@ __all__ = ["StereoCalibration", "ViewError", "calibrate_stereo", "calibrate_ster
 
 log = logging.getLogger(__name__)
 Corners = NDArray[np.float32]
-_MAX_ROUNDS = 5
-_METHOD = "s2r calibrate: OpenCV calibrateCameraExtended per camera, stereoCalibrate with CALIB_FIX_INTRINSIC"
 
 
 @dataclass(frozen=True)
@@ -97,6 +87,7 @@ class StereoCalibration:
     sample_paths: tuple[Path, Path] | None = None
     sample_images: tuple[NDArray[np.uint8], NDArray[np.uint8]] | None = field(default=None, repr=False)
     detection_cached: int = 0
+    solution: PairSolution | None = field(default=None, repr=False)
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -130,61 +121,19 @@ def _camera_figures(cam: Camera) -> dict[str, Any]:
 def make_camera(K: NDArray[np.float64], D: NDArray[np.float64], size: tuple[int, int], std: NDArray[np.float64],
                 *, distortion: str) -> Camera:
     """A profile Camera from OpenCV K, D and the std vector ``(fx, fy, cx, cy, d...)``."""
-    ncoef = DISTORTION_CHOICES[distortion][1]
-    model = "rational_polynomial" if distortion == "rational" else "plumb_bob"
-    coefs = tuple(float(v) for v in np.asarray(D, np.float64).reshape(-1)[:ncoef])
+    lens = lens_model(distortion)
+    coefs = tuple(float(v) for v in np.asarray(D, np.float64).reshape(-1)[:lens.n_coef])
+    dstd = [float(v) for v in np.asarray(std, np.float64)[4:4 + lens.n_coef]]
+
+    def sd(v: float) -> float | None:  # unobservable (inf / NaN) is None, never a NaN the profile rejects
+        return float(v) if np.isfinite(v) else None
+
     return Camera(
         width_px=size[0], height_px=size[1], fx_px=float(K[0, 0]), fy_px=float(K[1, 1]),
-        cx_px=float(K[0, 2]), cy_px=float(K[1, 2]), distortion=Distortion(model=model, coefficients=coefs),
-        std=CameraUncertainty(fx_px=float(std[0]), fy_px=float(std[1]), cx_px=float(std[2]), cy_px=float(std[3]),
-                              distortion=tuple(float(v) for v in std[4:4 + ncoef])))
-
-
-@dataclass
-class _Solved:
-    keep: list[int]
-    mono_l: MonoSolution
-    mono_r: MonoSolution
-    stereo: StereoSolution
-    threshold: float
-    outliers: list[ViewError]
-
-
-def _solve_rounds(views: StereoViews, obj: Corners, size: tuple[int, int], *, distortion: str,
-                  max_error_px: float | None, refine_joint: bool, keep: list[int]) -> _Solved:
-    """Solve views ``keep``; drop views above the threshold in any camera or the pair; repeat until none is."""
-    outliers: list[ViewError] = []
-    thr: list[float] | None = None
-    for _ in range(_MAX_ROUNDS):
-        objs = [obj] * len(keep)
-        pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-        ml = solve_mono(objs, pl, size, distortion=distortion)
-        mr = solve_mono(objs, pr, size, distortion=distortion)
-        st = solve_stereo(objs, pl, pr, size, ml, mr, distortion=distortion, refine_joint=refine_joint)
-        sv = st.per_view_px.max(axis=1)
-        if thr is None:  # thresholds from the first solve only, so later rounds do not shave good views
-            thr = [outlier_threshold(e, max_error_px=max_error_px) for e in (ml.per_view_px, mr.per_view_px, sv)]
-        bad = [j for j in range(len(keep))
-               if ml.per_view_px[j] > thr[0] or mr.per_view_px[j] > thr[1] or sv[j] > thr[2]]
-        if not bad:
-            return _Solved(keep, ml, mr, st, thr[2], outliers)
-        if len(keep) - len(bad) < MIN_VIEWS:
-            log.warning("%d views exceed the outlier threshold (%.2f px) but dropping them would leave fewer "
-                        "than %d views; kept them", len(bad), thr[2], MIN_VIEWS)
-            return _Solved(keep, ml, mr, st, thr[2], outliers)
-        for j in bad:
-            outliers.append(ViewError(views.names[keep[j]], float(ml.per_view_px[j]), float(mr.per_view_px[j]),
-                                      float(sv[j]), used=False,
-                                      reason=_outlier_reason(ml.per_view_px[j], mr.per_view_px[j], sv[j], thr)))
-        keep = [k for j, k in enumerate(keep) if j not in set(bad)]
-    assert thr is not None
-    return _Solved(keep, ml, mr, st, thr[2], outliers)
-
-
-def _outlier_reason(left: float, right: float, pair: float, thr: Sequence[float]) -> str:
-    parts = [f"{what} RMS {err:.3f} px > {t:.3f} px" for what, err, t in
-             (("left", left, thr[0]), ("right", right, thr[1]), ("stereo", pair, thr[2])) if err > t]
-    return "outlier: " + ", ".join(parts)
+        cx_px=float(K[0, 2]), cy_px=float(K[1, 2]),
+        distortion=Distortion(model=lens.profile_model, coefficients=coefs),  # type: ignore[arg-type]
+        std=CameraUncertainty(fx_px=sd(std[0]), fy_px=sd(std[1]), cx_px=sd(std[2]), cy_px=sd(std[3]),
+                              distortion=tuple(dstd) if all(np.isfinite(dstd)) else None))
 
 
 def epipolar_rms(profile: StereoProfile, left: Sequence[Corners], right: Sequence[Corners]) -> float:
@@ -218,22 +167,15 @@ def _uncertainty_warnings(profile: StereoProfile) -> list[str]:
     return out
 
 
-def _right_poses(st: StereoSolution) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]]:
-    r_lr = cv2.Rodrigues(st.R)[0]
-    rv, tv = [], []
-    for r, t in zip(st.rvecs, st.tvecs, strict=True):
-        r3, t3 = cv2.composeRT(r.reshape(3, 1), t.reshape(3, 1), r_lr, st.T.reshape(3, 1))[:2]
-        rv.append(np.asarray(r3, np.float64).reshape(3))
-        tv.append(np.asarray(t3, np.float64).reshape(3))
-    return rv, tv
-
-
 def calibrate_stereo_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, pattern: tuple[int, int], square_m: float, name: str,
-    distortion: str, max_error_px: float | None, refine_joint: bool, sources: Sequence[SourceFile],
-    extra_dropped: Sequence[DroppedView] = (), sample_paths: tuple[Path, Path] | None = None,
+    distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
+    swap: bool = False, sources: Sequence[SourceFile] = (), extra_dropped: Sequence[DroppedView] = (),
+    sample_paths: tuple[Path, Path] | None = None,
 ) -> StereoCalibration:
     """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`."""
+    if swap:
+        pairs = [(n, dr, dl) for n, dl, dr in pairs]
     size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
     views = stereo_views(pairs, pattern)
     readable = sum(d.status != "unreadable" for _, dl, dr in pairs for d in (dl, dr))
@@ -247,56 +189,60 @@ def calibrate_stereo_detections(
     if len(selected) < len(views.names):
         log.warning("%d usable pairs; solving with the %d most diverse (MAX_SOLVE_VIEWS)", len(views.names),
                     len(selected))
-    solved = _solve_rounds(views, obj, size, distortion=distortion, max_error_px=max_error_px,
-                           refine_joint=refine_joint, keep=selected)
-    st, keep = solved.stereo, solved.keep
+    sol = solve_pair([views.names[i] for i in selected], [views.left[i] for i in selected],
+                     [views.right[i] for i in selected], obj, size, distortion=distortion, max_error_px=max_error_px,
+                     fix_intrinsics=fix_intrinsics, square_m=square_m)
+    keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-    dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in solved.outliers]
+    dropped += [DroppedView(name=views.names[selected[i]], reason=why) for i, why in sol.mismatched]
+    outliers = [ViewError(views.names[selected[i]], a, b, c, used=False, reason=why)
+                for i, a, b, c, why in sol.outliers]
+    dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in outliers]
     cov_l, cov_r = coverage_of(pl, size), coverage_of(pr, size)
-    spread = pose_spread(st.rvecs, st.tvecs, pl, pattern=pattern, square_m=square_m, size=size)
+    spread = pose_spread(sol.rvecs, sol.tvecs, pl, pattern=pattern, square_m=square_m, size=size)
     quality = CalibrationQuality(
         pattern=pattern, square_m=square_m, views_used=len(keep), views_dropped=tuple(dropped),
-        views_detected=len(views.names),
-        rms_left_px=solved.mono_l.rms_px, rms_right_px=solved.mono_r.rms_px, rms_stereo_px=st.rms_px,
-        coverage_left=cov_l.fraction, coverage_right=cov_r.fraction, tilt_range_deg=spread.tilt_deg,
-        distance_range_m=spread.distance_m, distortion_terms=distortion)
-    profile = _stereo_profile(name, solved, obj, pl, pr, size, distortion=distortion, refine_joint=refine_joint,
-                              sources=sources, quality=quality)
+        views_detected=len(views.names), rms_left_px=sol.rms_left_px, rms_right_px=sol.rms_right_px,
+        rms_stereo_px=sol.rms_px, coverage_left=cov_l.fraction, coverage_right=cov_r.fraction,
+        tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
+    profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*_uncertainty_warnings(profile), *coverage_warnings("left", cov_l, spread),
-                *coverage_warnings("right", cov_r)]
+    warnings = [*_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
+                *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
-    view_errors = [ViewError(views.names[k], float(st_l), float(st_r), float(max(s)), used=True)
-                   for k, st_l, st_r, s in zip(keep, solved.mono_l.per_view_px, solved.mono_r.per_view_px,
-                                               st.per_view_px, strict=True)]
+    view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
+                   for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(
-        profile=profile, views=tuple(view_errors + solved.outliers), dropped=tuple(dropped),
-        threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
+        profile=profile, views=tuple(view_errors + outliers), dropped=tuple(dropped),
+        threshold_px=sol.threshold_px, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
         epipolar_rms_px=float("nan") if epi is None else epi, warnings=tuple(warnings),
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
-        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)))
+        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol)
 
 
-def _stereo_profile(name: str, solved: _Solved, obj: Corners, pl: Sequence[Corners], pr: Sequence[Corners],
-                    size: tuple[int, int], *, distortion: str, refine_joint: bool, sources: Sequence[SourceFile],
+def _unobservable_warnings(names: Sequence[str]) -> list[str]:
+    if not names:
+        return []
+    return [f"not observable from these views: {', '.join(names)} (std reported as unknown); use a lens model "
+            "with fewer terms (--distortion k1k2p1p2) or add views covering the image corners at varied tilt"]
+
+
+def _stereo_profile(name: str, sol: PairSolution, pl: Sequence[Corners], pr: Sequence[Corners],
+                    size: tuple[int, int], *, distortion: str, sources: Sequence[SourceFile],
                     quality: CalibrationQuality) -> StereoProfile:
     """The real profile: cameras with std devs, extrinsics with the baseline std, provenance with the
     quality figures completed by the epipolar error after rectification."""
-    st = solved.stereo
-    cov_t, _sigma = baseline_covariance([obj] * len(pl), pl, pr, st, distortion=distortion,
-                                       fixed_intrinsics=not refine_joint)
-    u = st.T / np.linalg.norm(st.T)
+    b_std = sol.baseline_std_m if np.isfinite(sol.baseline_std_m) else None
     profile = StereoProfile(
         name=name,
-        left=make_camera(st.K1, st.D1, size, solved.mono_l.std, distortion=distortion),
-        right=make_camera(st.K2, st.D2, size, solved.mono_r.std, distortion=distortion),
-        extrinsics=Extrinsics(rotation=tuple(tuple(float(v) for v in row) for row in st.R),  # type: ignore[arg-type]
-                              translation_m=tuple(float(v) for v in st.T),  # type: ignore[arg-type]
-                              baseline_std_m=float(np.sqrt(max(0.0, float(u @ cov_t @ u))))),
-        provenance=Provenance(origin="real", method=_METHOD + (" + joint refinement" if refine_joint else ""),
-                              sources=tuple(sources), calibration=quality))
+        left=make_camera(sol.K1, sol.D1, size, sol.std_left, distortion=distortion),
+        right=make_camera(sol.K2, sol.D2, size, sol.std_right, distortion=distortion),
+        extrinsics=Extrinsics(rotation=tuple(tuple(float(v) for v in row) for row in sol.R),  # type: ignore[arg-type]
+                              translation_m=tuple(float(v) for v in sol.T),  # type: ignore[arg-type]
+                              baseline_std_m=b_std),
+        provenance=Provenance(origin="real", method=sol.method, sources=tuple(sources), calibration=quality))
     epi = epipolar_rms(profile, pl, pr)
     return profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
@@ -320,24 +266,28 @@ def _pairs_of(stream: Iterable[Detection], names: Sequence[str]) -> list[tuple[s
 
 def calibrate_stereo(
     left_paths: Sequence[Path], right_paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6),
-    square_m: float = 0.025, name: str = "calibrated", distortion: str = "k1k2", max_error_px: float | None = None,
-    refine_joint: bool = False, jobs: int | None = None, cache_dir: Path | None = None,
-    progress: ProgressCallback | None = None, names: Sequence[str] | None = None,
+    square_m: float = 0.025, name: str = "calibrated", distortion: str = DEFAULT_LENS,
+    max_error_px: float | None = None, fix_intrinsics: bool = False, swap: bool = False, jobs: int | None = None,
+    cache_dir: Path | None = None, progress: ProgressCallback | None = None, names: Sequence[str] | None = None,
     unpaired: Sequence[Path] = (),
 ) -> StereoCalibration:
     """Calibrate a stereo pair from chessboard image files (``left_paths[i]`` pairs with ``right_paths[i]``).
 
     Args:
         pattern: inner corners ``(cols, rows)``; square_m: square size in metres.
-        distortion: ``k1k2`` (k3 and tangential fixed), ``plumb_bob`` (5 terms) or ``rational`` (8 terms).
+        distortion: a :data:`s2r.calib.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
-        refine_joint: refine intrinsics and extrinsics jointly after the fixed-intrinsics stereo solve.
+        fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
+        swap: exchange the left and right images (when the check finds the right camera to the left).
         jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
         names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
 
     Raises:
-        CalibrationError: mixed sizes, no board at all (wrong pattern), fewer than MIN_VIEWS usable pairs.
+        CalibrationError: mixed sizes, no board at all (wrong pattern), fewer than MIN_VIEWS usable pairs,
+            identical or mismatched pairs, swapped cameras, an implausible ``square_m``.
     """
+    if swap:
+        left_paths, right_paths = right_paths, left_paths
     if len(left_paths) != len(right_paths):
         raise CalibrationError(f"{len(left_paths)} left but {len(right_paths)} right images",
                                hint="pass the same number of left and right images")
@@ -354,7 +304,7 @@ def calibrate_stereo(
     report(progress, 0, 1, "solving")
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        refine_joint=refine_joint, sources=sources, extra_dropped=extra)
+        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra)
     report(progress, 1, 1, "solving")
     first = result.used_names[0]
     idx = [n for n, _, _ in pairs].index(first)

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from s2r.calib.coverage import PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import Detection
 from s2r.calib.fisheye import FisheyeMono, fisheye_baseline_covariance, solve_mono_fisheye, solve_stereo_fisheye
+from s2r.calib.lens import LensModel
 from s2r.calib.markers import usable_corners
 from s2r.calib.solve import (
     MonoSolution,
@@ -195,6 +196,23 @@ def to_camera(sol: MonoSolution, size: tuple[int, int], *, lens: str, distortion
                               distortion=tuple(float(v) for v in std[4:4 + ncoef])))
 
 
+def camera_of(K: NDArray[np.float64], D: NDArray[np.float64], std: NDArray[np.float64], size: tuple[int, int],
+              model: LensModel) -> Camera:
+    """A profile camera from the joint solve: K, D (the model's stored coefficients), std ``(fx fy cx cy d..)``
+    with inf for unobservable parameters (stored as unknown)."""
+    def sd(v: float) -> float | None:
+        return float(v) if np.isfinite(v) else None
+
+    dstd = [float(v) for v in std[4:4 + model.n_coef]]
+    return Camera(
+        width_px=size[0], height_px=size[1], fx_px=float(K[0, 0]), fy_px=float(K[1, 1]), cx_px=float(K[0, 2]),
+        cy_px=float(K[1, 2]),
+        distortion=Distortion(model=model.profile_model,  # type: ignore[arg-type]
+                              coefficients=tuple(float(v) for v in np.asarray(D).reshape(-1)[:model.n_coef])),
+        std=CameraUncertainty(fx_px=sd(std[0]), fy_px=sd(std[1]), cx_px=sd(std[2]), cy_px=sd(std[3]),
+                              distortion=tuple(dstd) if all(np.isfinite(dstd)) else None))
+
+
 def centred_spread(sol: MonoSolution, views: Sequence[Observation], target: AnyTarget,
                    size: tuple[int, int]) -> PoseSpread:
     """Tilt, distance (to the target's centre) and image share of the solved views."""
@@ -245,24 +263,23 @@ def pair_views(names: Sequence[str], left: Sequence[Observation | None], right: 
 
 
 def solve_pair(views: Sequence[PairView], fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, lens: str,
-               distortion: str, refine_joint: bool) -> StereoSolution:
+               distortion: str) -> StereoSolution:
     """The pair's motion from the corners both cameras saw, intrinsics from the mono fits."""
     objs, pl, pr = [v.obj for v in views], [v.left for v in views], [v.right for v in views]
     if lens == "fisheye":
         return solve_stereo_fisheye(objs, pl, pr, fit_l.solution, fit_r.solution, idx_l=[v.idx_l for v in views],
                                     idx_r=[v.idx_r for v in views])
-    return solve_stereo(objs, pl, pr, size, fit_l.solution, fit_r.solution, distortion=distortion,
-                        refine_joint=refine_joint)
+    return solve_stereo(objs, pl, pr, size, fit_l.solution, fit_r.solution, distortion=distortion)
 
 
 def baseline_cov(views: Sequence[PairView], st: StereoSolution, fit_l: MonoFit, fit_r: MonoFit, *, lens: str,
-                 distortion: str, refine_joint: bool) -> NDArray[np.float64]:
+                 distortion: str) -> NDArray[np.float64]:
     """Covariance (3x3, m^2) of the translation, both lens kinds."""
     objs, pl, pr = [v.obj for v in views], [v.left for v in views], [v.right for v in views]
     if lens == "fisheye":
         assert fit_l.cov is not None and fit_r.cov is not None
         return fisheye_baseline_covariance(objs, pl, pr, st, fit_l.cov, fit_r.cov)[0]
-    return baseline_covariance(objs, pl, pr, st, distortion=distortion, fixed_intrinsics=not refine_joint)[0]
+    return baseline_covariance(objs, pl, pr, st, distortion=distortion, fixed_intrinsics=True)[0]
 
 
 def check_enough(found: int, dropped: Sequence[DroppedView], *, what: str) -> None:

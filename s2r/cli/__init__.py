@@ -1,23 +1,35 @@
 """The ``s2r`` command line: parses arguments, calls the library, prints, returns an exit code.
 
-Exit codes: 0 ok, 1 a check failed, 2 bad input or usage. Errors print as one ``error: ...`` line on
-stderr; ``--debug`` shows the traceback instead. Warnings from the library (logging) go to stderr.
+Exit codes: 0 ok, 1 a check failed (a finding), 2 bad input or usage, 3 an internal error (a bug in s2r),
+130 interrupted (Ctrl-C). Errors print as one ``error: ...`` line on stderr; ``--debug`` shows the traceback
+instead. Warnings from the library (logging) go to stderr. Output piped into a reader that stops early
+(``s2r ... | head``) ends the run quietly with exit 0.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 
 from s2r._version import __version__
-from s2r.cli import calibrate_cmd, depth_cmd, profile_cmd, render_cmd, sources_cmd, validate_cmd
+from s2r.cli import (
+    calibrate_cmd,
+    depth_cmd,
+    depth_quality_cmd,
+    profile_cmd,
+    render_cmd,
+    sources_cmd,
+    validate_cmd,
+)
 from s2r.errors import S2RError
 
 __all__ = ["build_parser", "main"]
 
-EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+_REPORT_HINT = "this is a bug in s2r: rerun with --debug and report the command and the traceback"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -31,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     sources_cmd.register(sub, profile_sub)
     render_cmd.register(sub)
     depth_cmd.register(sub)
+    depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
     return parser
@@ -51,21 +64,53 @@ def _configure_logging(quiet: bool) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit code (0 ok, 1 check failed, 2 bad input)."""
+    """Run the CLI; returns the exit code (0 ok, 1 check failed, 2 bad input, 3 internal error, 130 Ctrl-C).
+
+    This is the one error boundary of the CLI: every exception ends here as one ``error:`` line.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     _configure_logging(args.quiet)
     try:
         code: int = args.func(args)
-    except S2RError as exc:
+        sys.stdout.flush()  # a closed pipe shows here, inside the boundary, not at interpreter exit
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+    except Exception as exc:
         if args.debug:
             raise
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr)
-        return 130
+        code = _report(exc)
     return code
+
+
+def _report(exc: Exception) -> int:
+    """Print ``exc`` as one ``error:`` line; its exit code (2 for bad input, 3 for a bug in s2r)."""
+    try:
+        if isinstance(exc, S2RError):
+            print(f"error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, OSError) and exc.filename is not None:  # a file the user named is unusable
+            print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        detail = " ".join(str(exc).split())[:200]
+        print(f"error: internal error ({type(exc).__name__}: {detail}); {_REPORT_HINT}", file=sys.stderr)
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
+    return EXIT_INTERNAL
+
+
+def _quiet_broken_pipe() -> int:
+    """The reader of our output went away (``| head``): stop without a traceback at interpreter exit."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, stream.fileno())
+            os.close(devnull)
+        except (OSError, ValueError):
+            pass
+    return EXIT_OK
 
 
 if __name__ == "__main__":

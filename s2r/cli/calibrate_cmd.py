@@ -15,6 +15,8 @@ from s2r.formats.s2r_yaml import dump_profile
 __all__ = ["register"]
 
 EXIT_OK = 0
+#: s2r.calib.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+DEFAULT_LENS = "k1k2p1p2"
 
 
 def register(sub: Any) -> None:
@@ -31,16 +33,22 @@ def register(sub: Any) -> None:
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
     p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
-    p.add_argument("--distortion", choices=("k1k2", "plumb_bob", "rational", "equidistant"), default="k1k2",
-                   help="distortion terms to solve (default k1k2: k3 and tangential fixed at 0; equidistant = "
-                        "--lens fisheye)")
+    p.add_argument("--distortion", choices=("k1k2p1p2", "k1k2", "plumb_bob", "rational", "equidistant"),
+                   default="k1k2p1p2",
+                   help="distortion terms to solve (default k1k2p1p2: k3 fixed at 0, as ROS camera_calibration; "
+                        "equidistant = --lens fisheye)")
     p.add_argument("--target", type=Path, default=None, metavar="TARGET.yaml",
                    help="board described by a file: Kalibr aprilgrid / checkerboard, or charuco (partial views used)")
     p.add_argument("--lens", choices=("pinhole", "fisheye"), default="pinhole",
                    help="projection model: pinhole (OpenCV's k1..k6 models) or fisheye (equidistant k1..k4)")
     p.add_argument("--max-error", type=float, default=None, metavar="PX",
                    help="drop views whose RMS exceeds PX (default: a robust median/MAD threshold)")
-    p.add_argument("--refine-joint", action="store_true", help="refine intrinsics and extrinsics jointly")
+    p.add_argument("--fix-intrinsics", action="store_true",
+                   help="ROS's way: each camera's intrinsics from its own views, held fixed in the stereo solve "
+                        "(default: one joint solve of both cameras, the extrinsics and every board pose)")
+    p.add_argument("--refine-joint", action="store_true", help=argparse.SUPPRESS)  # the default now
+    p.add_argument("--swap", action="store_true",
+                   help="exchange left and right (when s2r finds the right camera to the left of the left one)")
     p.add_argument("--mono", action="store_true", help="calibrate one camera into a camera-only profile")
     p.add_argument("--left", default=None, metavar="GLOB", help="left (or mono) images by glob")
     p.add_argument("--right", default=None, metavar="GLOB", help="right images by glob")
@@ -58,7 +66,7 @@ def register(sub: Any) -> None:
 def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tuple[str, Any]:
     """``(lens, target or None)``: a target file, or the --pattern chessboard when the lens is a fisheye."""
     lens = "fisheye" if args.distortion == "equidistant" else args.lens
-    if lens == "fisheye" and args.distortion not in ("k1k2", "equidistant"):
+    if lens == "fisheye" and args.distortion not in (DEFAULT_LENS, "equidistant"):
         raise CalibrationError(f"--distortion {args.distortion} is a pinhole model; a fisheye lens solves the "
                                "equidistant k1..k4", field="--distortion", hint="drop --distortion or --lens")
     if args.target is not None:
@@ -121,7 +129,8 @@ def run(args: argparse.Namespace) -> int:
         from s2r.calib.bags import calibrate_stereo_bag
 
         result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                      max_dt_s=args.max_dt, every=args.every, refine_joint=args.refine_joint,
+                                      max_dt_s=args.max_dt, every=args.every,
+                                      fix_intrinsics=args.fix_intrinsics, swap=args.swap,
                                       **common)
     else:
         from s2r.calib.inputs import find_stereo_pairs
@@ -129,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
         result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                  refine_joint=args.refine_joint, **common)
+                                  fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
     dump_profile(result.profile, out, force=args.force)
     if args.report is not None:
         from s2r.calib.report import write_calibration_report
@@ -146,7 +155,8 @@ def run(args: argparse.Namespace) -> int:
 def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
     """Calibrate with corner ids (a target file, or a fisheye lens): mono, folder/glob pairs or a bag."""
     kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
-    kw.update(target=target, lens=lens, distortion="k1k2" if args.distortion == "equidistant" else args.distortion)
+    kw.update(target=target, lens=lens,
+              distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
     if args.mono:
         from s2r.calib.inputs import find_mono_images
         from s2r.calib.target_stereo import calibrate_mono_target
@@ -159,14 +169,14 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
         from s2r.calib.bags import calibrate_stereo_bag
 
         return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                    max_dt_s=args.max_dt, every=args.every, refine_joint=args.refine_joint,
-                                    **common, target=target, lens=lens)
+                                    max_dt_s=args.max_dt, every=args.every, fix_intrinsics=args.fix_intrinsics,
+                                    swap=args.swap, **common, target=target, lens=lens)
     from s2r.calib.inputs import find_stereo_pairs
     from s2r.calib.target_stereo import calibrate_stereo_target
 
     pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
     return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                   refine_joint=args.refine_joint, **kw)
+                                   fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
 
 
 def _print_summary(result: Any, out: Path) -> None:

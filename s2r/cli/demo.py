@@ -5,7 +5,7 @@
 3. validate sim against real (verdict, edits, depth error by distance) with an HTML report;
 4. export the real profile as Gazebo sensor tags, re-derive the sim profile, validate again: it passes.
 
-Run as ``python -m s2r.cli.demo [--quick] [--out DIR] [--report DIR]``; exits 0 when the story ends as it
+Run as ``python -m s2r.cli.demo [--quick] [-o DIR] [--report DIR]``; exits 0 when the story ends as it
 should (flawed rig flagged, calibration within tolerance, first validation failing, closed loop passing).
 """
 
@@ -42,7 +42,7 @@ def _rel(path: Path) -> str:
 def sample_command(sample: Path) -> list[str]:
     """The command that (re)generates the sample set; ``make calibration-sample`` runs the same."""
     return ["render", "boards", _rel(UNIT_TRUTH), "--views", "24", "--seed", "7", "--noise", "2",
-            "--out", _rel(sample), "--force"]
+            "-o", _rel(sample), "--force"]
 
 
 @dataclass
@@ -189,7 +189,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m s2r.cli.demo``: exit 0 when the story ends as it should, 1 otherwise."""
     parser = argparse.ArgumentParser(prog="python -m s2r.cli.demo", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="quick validations, no calibration report")
-    parser.add_argument("--out", default="demo_out", help="folder for profiles and Gazebo files")
+    parser.add_argument("-o", "--output", "--out", dest="out", default="demo_out",
+                        help="folder for profiles and Gazebo files (--out is kept as an alias)")
     parser.add_argument("--report", default="demo_report", help="folder for the HTML reports")
     args = parser.parse_args(argv)
     start = time.monotonic()

@@ -15,6 +15,7 @@ from s2r.fileio import check_output_free, prepare_output_dir
 
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
+    from s2r.rectification import StereoRectification
 
 __all__ = ["register"]
 
@@ -24,7 +25,10 @@ def register(sub: Any) -> None:
     parser = sub.add_parser(
         "depth", help="depth maps from stereo pairs",
         description="Rectify with a profile, match with a preset, and write disparity.npy (float32 px, NaN "
-        "invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET) and optionally points.ply.")
+        "invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET with a colour bar in metres), "
+        "camera_info.yaml (ROS camera_info of the rectified left camera, the frame of every output) and "
+        "optionally points.ply. Depth outside the profile's matcher.min_depth_m..max_depth_m is invalid unless "
+        "--keep-out-of-range.")
     parser.add_argument("left", nargs="?", type=Path, help="left image (single-pair mode)")
     parser.add_argument("right", nargs="?", type=Path, help="right image (single-pair mode)")
     parser.add_argument("--profile", help="profile name or YAML path (default: $S2R_PROFILE)")
@@ -36,6 +40,8 @@ def register(sub: Any) -> None:
     parser.add_argument("--alpha", type=float, default=0.0, help="rectification alpha (0 valid pixels only)")
     parser.add_argument("--resize", action="store_true", help="accept other image sizes by rescaling intrinsics")
     parser.add_argument("--ply", action="store_true", help="also write a coloured point cloud (points.ply)")
+    parser.add_argument("--keep-out-of-range", action="store_true",
+                        help="keep depths outside the profile's min_depth_m..max_depth_m (default: invalid, 0)")
     parser.add_argument("--left-dir", type=Path, help="folder of left images (sequence mode)")
     parser.add_argument("--right-dir", type=Path, help="folder of right images, paired by sorted names")
     parser.add_argument("--workers", type=int, default=2, help="compute threads in sequence mode (default 2)")
@@ -67,39 +73,77 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 
 
+def _depth_range(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[float, float] | None:
+    """The profile's working range (metres) that depth outputs are limited to; None with --keep-out-of-range."""
+    m = pipeline.profile.matcher
+    return None if args.keep_out_of_range else (m.min_depth_m, m.max_depth_m)
+
+
+def _geometry(pipeline: StereoPipeline, rect: StereoRectification, depth_range: tuple[float, float] | None
+              ) -> dict[str, Any]:
+    """f, B, the principal point, Q and the depth range of the rectified left camera, for --json."""
+    return {"f_px": rect.fx_px, "baseline_m": rect.baseline_m, "cx_px": float(rect.P1[0, 2]),
+            "cy_px": float(rect.P1[1, 2]), "doffs_px": rect.doffs_px, "Q": rect.Q.tolist(),
+            "image_size": list(rect.image_size), "depth_range_m": None if depth_range is None else list(depth_range),
+            "frame": "rectified left camera (camera_info.yaml)"}
+
+
 def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
-    from s2r.depth.outputs import read_image, write_outputs
+    from s2r.depth.outputs import limit_depth_range, read_image, write_camera_info, write_outputs
 
     left, right = read_image(args.left), read_image(args.right)
-    result = pipeline.compute(left, right)
-    names = ["disparity.npy", "depth.png", "depth_color.png"] + (["points.ply"] if args.ply else [])
-    for name in names:  # refuse before writing anything
+    names = ["disparity.npy", "depth.png", "depth_color.png", "camera_info.yaml"] + (["points.ply"] if args.ply
+                                                                                      else [])
+    for name in names:  # refuse before computing or writing anything
         check_output_free(args.output / name, force=args.force)
+    result = pipeline.compute(left, right)
+    depth_range = _depth_range(args, pipeline)
+    removed = 0
+    if depth_range is not None:
+        result, removed = limit_depth_range(result, *depth_range)
+    rect = pipeline.geometry_for((left.shape[1], left.shape[0])).rectification
     written = write_outputs(args.output, result, ply=args.ply, force=args.force)
+    written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
+                                     "rectified_left", force=args.force))
     valid_fraction = float(result.valid.mean())
     summary: dict[str, Any] = {"profile": pipeline.profile.name, "preset": pipeline.preset,
                "num_disparities": pipeline.config.num_disparities, "postprocess": list(pipeline.postprocess),
-               "valid_fraction": valid_fraction,
-               "median_depth_m": float(_nanmedian(result.depth)), "outputs": [str(p) for p in written]}
+               "valid_fraction": valid_fraction, "out_of_range_removed": removed,
+               "median_depth_m": float(_nanmedian(result.depth)), **_geometry(pipeline, rect, depth_range),
+               "outputs": [str(p) for p in written]}
     if args.json:
         print_json(summary)
     else:
-        print(f"{pipeline.profile.name} / {pipeline.preset}: {100 * valid_fraction:.1f} % valid, "
-              f"median depth {summary['median_depth_m']:.3f} m -> {args.output}")
+        limits = "" if depth_range is None else (f", {removed} px outside {depth_range[0]:g}-{depth_range[1]:g} m "
+                                                 "set invalid")
+        print(f"{pipeline.profile.name} / {pipeline.preset}: {100 * valid_fraction:.1f} % valid{limits}, "
+              f"median depth {summary['median_depth_m']:.3f} m, f {rect.fx_px:.2f} px, B {rect.baseline_m:.4f} m "
+              f"-> {args.output}")
     return 0
 
 
 def _run_sequence(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
+    from s2r.depth.outputs import read_image, write_camera_info
     from s2r.depth.sequence import pair_images, run_sequence
 
     pairs = pair_images(args.left_dir, args.right_dir)
     prepare_output_dir(args.output, force=args.force)
+    check_output_free(args.output / "camera_info.yaml", force=args.force)
     bar = ProgressBar(enabled=None if not args.quiet else False)
+    depth_range = _depth_range(args, pipeline)
     frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.workers,
-                          progress=bar)
+                          progress=bar, depth_range_m=depth_range)
+    # every frame has the profile's size unless --resize: then the camera_info of the first frame's size
+    size = pipeline.profile.image_size
+    if args.resize and pairs:
+        shape = read_image(pairs[0][0]).shape
+        size = (shape[1], shape[0])
+    rect = pipeline.geometry_for(size).rectification
+    write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/rectified_left",
+                      force=args.force)
     if args.json:
         print_json({"profile": pipeline.profile.name, "preset": pipeline.preset, "frames": frames,
-                    "output": str(args.output)})
+                    "output": str(args.output), **_geometry(pipeline, rect, depth_range)})
     else:
         print(f"{pipeline.profile.name} / {pipeline.preset}: {frames} frames -> {args.output}")
     return 0

@@ -64,7 +64,10 @@ def _register_convert(profile_sub: Any) -> None:
                         help="metres per unit of an OpenCV file's T: the square size when it was calibrated in "
                         "squares, 0.001 for millimetres (default 1: T already in metres)")
     p_conv.add_argument("--resolution", type=_size, metavar="WxH",
-                        help="RealSense: which infrared resolution to import (default 848x480 or the only one)")
+                        help="RealSense: which infrared resolution to import (default 848x480 or the only one); "
+                        "ZED conf: which section (2208x1242, 1920x1080, 1280x720 or 672x376; default 1280x720)")
+    p_conv.add_argument("--left", metavar="CAM", help="Kalibr camchain: the left camera (camN; default cam0)")
+    p_conv.add_argument("--right", metavar="CAM", help="Kalibr camchain: the right camera (camM; default cam1)")
     p_conv.add_argument("--drop-k3", action="store_true",
                         help="Kalibr export: drop a non-zero k3 (radtan has none) instead of refusing")
     add_force(p_conv)
@@ -156,13 +159,15 @@ def _cmd_convert(args: argparse.Namespace) -> int:
     sources = [str(resolve_profile(args.src[0]))] if len(args.src) == 1 else args.src  # a name works too
     fmt = detect_format(sources[0])
     profile = load_any(sources, name=args.name, origin=args.origin, image_size=args.image_size,
-                       t_scale_m=args.units_m, resolution=args.resolution)
+                       t_scale_m=args.units_m, resolution=args.resolution, cameras=(args.left, args.right))
     written = _write(profile, args)
     if args.json:
         print_json({"input_format": fmt, "inputs": sources, "output_format": args.to,
                     "outputs": [str(p) for p in written], "profile": profile_summary(profile)})
         return 0
-    print(f"read {FORMAT_NAMES[fmt]}: {', '.join(sources)} -> profile {profile.name} "
+    method = profile.provenance.method
+    found = method.removeprefix("imported from ") if method.startswith("imported from ") else FORMAT_NAMES[fmt]
+    print(f"read {found}: {', '.join(sources)} -> profile {profile.name} "
           f"({profile.image_size[0]}x{profile.image_size[1]}, baseline {1000 * profile.baseline_m:.2f} mm)")
     for path in written:
         print(f"wrote {path}")

@@ -16,7 +16,8 @@ SCENE_CHOICES = ("planes", "slanted", "room")
 
 def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("profile", help="profile name or path")
-    parser.add_argument("--out", required=True, metavar="DIR", help="output folder (must be empty unless --force)")
+    parser.add_argument("-o", "--output", "--out", dest="out", required=True, metavar="DIR",
+                        help="output folder (must be empty unless --force); --out is kept as an alias")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same output")
     parser.add_argument("--supersample", type=int, default=2, metavar="S",
                         help="render at S x size and average down (default 2; TinyRenderer has no anti-aliasing)")

@@ -13,13 +13,13 @@ from s2r.errors import SourceError
 from s2r.fileio import atomic_write_text, check_output_free
 from s2r.formats.s2r_yaml import dump_profile, profile_to_yaml
 from s2r.registry import load_profile
-from s2r.sources.conventions import CONVENTIONS
-from s2r.sources.gazebo_export import EXPORT_FORMATS, export_gazebo
-from s2r.sources.lint import lint_description
-from s2r.sources.profile_builder import load_description_profile
-from s2r.sources.shipped import REPO_ROOT, shipped_profiles
 
-__all__ = ["parse_xacro_args", "register"]
+__all__ = ["CONVENTION_CHOICES", "EXPORT_FORMAT_CHOICES", "parse_xacro_args", "register"]
+
+#: ``s2r.sources.CONVENTIONS`` and ``EXPORT_FORMATS``, repeated here so that building the parser does not import
+#: s2r.sources (the robot-description readers load only when a description command runs; a test keeps them equal).
+CONVENTION_CHOICES = ("gazebo-classic", "gz-sim", "exact")
+EXPORT_FORMAT_CHOICES = ("urdf", "sdf", "gz-sim")
 
 EXIT_OK, EXIT_FINDINGS = 0, 1
 logger = logging.getLogger("s2r.cli")
@@ -64,11 +64,13 @@ def register(sub: Any, profile_sub: Any) -> None:
         description="Two camera sensors (or one multicamera) to a sim stereo profile in a stated convention.")
     _add_description_options(p_from)
     p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
-    p_from.add_argument("--convention", choices=CONVENTIONS, default="gazebo-classic",
+    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default="gazebo-classic",
                         help="pixel convention of the intrinsics (default gazebo-classic)")
     p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
-    p_from.add_argument("--optical-links", action="store_true",
-                        help="the camera links are optical frames already (z forward); default: by link name")
+    p_from.add_argument("--allow-bad-baseline", action="store_true",
+                        help="write a pair lint calls an error (baseline along the optical axis, right camera on "
+                        "the left) with a warning instead of refusing it")
+    p_from.add_argument("--optical-links", action="store_true", help=argparse.SUPPRESS)
     add_force(p_from)
     add_json(p_from)
     p_from.set_defaults(func=_cmd_from_urdf)
@@ -77,7 +79,7 @@ def register(sub: Any, profile_sub: Any) -> None:
         "export-gazebo", help="Gazebo sensor XML that makes a simulated camera match a profile",
         description="Sensor blocks and the baseline joint/poses; warnings say what the format cannot express.")
     p_exp.add_argument("profile", help="profile name or path")
-    p_exp.add_argument("--format", dest="fmt", choices=EXPORT_FORMATS, default="urdf",
+    p_exp.add_argument("--format", dest="fmt", choices=EXPORT_FORMAT_CHOICES, default="urdf",
                        help="urdf (Gazebo classic, two sensors), sdf (classic multicamera) or gz-sim")
     p_exp.add_argument("-o", "--output", type=Path, required=True, help="XML file to write")
     add_force(p_exp)
@@ -91,6 +93,8 @@ def register(sub: Any, profile_sub: Any) -> None:
 
 
 def _cmd_lint(args: argparse.Namespace) -> int:
+    from s2r.sources.lint import lint_description
+
     info = None
     if args.camera_info is not None:
         from s2r.formats.ros import read_camera_info
@@ -111,11 +115,16 @@ def _cmd_lint(args: argparse.Namespace) -> int:
 
 
 def _cmd_from_urdf(args: argparse.Namespace) -> int:
+    from s2r.sources.profile_builder import load_description_profile
+
     check_output_free(args.output, force=args.force)
+    if args.optical_links:
+        logger.warning("--optical-links is ignored: the optical axes come from the sensor poses (Gazebo renders "
+                       "along the camera frame's +x whatever the link is called)")
     profile = load_description_profile(
         args.file, convention=args.convention, left=args.left, right=args.right,
         xacro_args=parse_xacro_args(args.xacro_args + args.xacro_more), package_paths=args.package_path, name=args.name,
-        optical=True if args.optical_links else None)
+        allow_bad_baseline=args.allow_bad_baseline)
     dump_profile(profile, args.output, force=args.force)
     if args.json:
         print_json({"output": str(args.output), "profile": profile})
@@ -129,6 +138,8 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    from s2r.sources.gazebo_export import export_gazebo
+
     check_output_free(args.output, force=args.force)
     profile = load_profile(args.profile)
     text, warnings = export_gazebo(profile, fmt=args.fmt)
@@ -140,6 +151,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_regenerate(args: argparse.Namespace) -> int:
+    from s2r.sources.shipped import REPO_ROOT, shipped_profiles
+
     stale = 0
     for path, profile in shipped_profiles().items():
         text = profile_to_yaml(profile)

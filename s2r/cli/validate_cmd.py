@@ -28,7 +28,8 @@ def register(sub: Any) -> None:
         "tolerance, 1 otherwise, 2 bad input.")
     parser.add_argument("sim", metavar="SIM", help="sim profile name or path (or the one profile to self-check)")
     parser.add_argument("real", metavar="REAL", nargs="?", help="real profile name or path")
-    parser.add_argument("--report", metavar="DIR", help="write DIR/validation.html (self-contained)")
+    parser.add_argument("-o", "--output", "--report", dest="report", metavar="DIR",
+                        help="write DIR/validation.html (self-contained); --report is kept as an alias")
     parser.add_argument("--tolerances", metavar="FILE", help="YAML file of tolerance overrides (key: number)")
     parser.add_argument("--quick", action="store_true",
                         help="fewer board views (1x) and planes, no slanted plane (~15 s)")

@@ -8,4 +8,4 @@ __all__ = ["PRESETS", "STAGES"]
 PRESETS: tuple[str, ...] = ("profile", "seed-sgbm", "fast", "bm", "ros-default")
 
 #: Every post-processing stage name (see :mod:`s2r.depth.postprocess`).
-STAGES: tuple[str, ...] = ("speckle", "lr-check", "median", "close", "fill")
+STAGES: tuple[str, ...] = ("speckle", "lr-check", "median", "close", "fill", "seed-median", "seed-close")

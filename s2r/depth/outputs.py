@@ -5,13 +5,20 @@ File conventions:
 - ``disparity.npy``: (H, W) float32 pixels in the rectified left image, NaN invalid.
 - ``depth.png``: (H, W) uint16 millimetres along the rectified left optical axis, 0 = invalid (the ROS /
   RealSense ``16UC1`` convention); depths beyond 65.535 m clip to 65535.
-- ``depth_color.png``: the disparity through OpenCV's JET colour map (near red, far blue), invalid black.
+- ``depth_color.png``: the disparity through OpenCV's JET colour map (near red, far blue), invalid black, with a
+  colour bar on the right labelled in metres (near at the top, far at the bottom).
 - ``points.ply``: binary little-endian PLY, float32 x y z metres in the rectified left optical frame and uchar
   red green blue.
+- ``camera_info.yaml``: ROS camera_info (camera_calibration_parsers YAML) of the RECTIFIED left camera, the frame
+  of every output above: K and P from the rectified projection P1, R identity, zero distortion, the image size.
+
+Depth outside the profile's working range (``matcher.min_depth_m`` .. ``max_depth_m``) is invalid by default
+(:func:`limit_depth_range`): a matcher's far end is noise (76 m points from a 1-px disparity).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -20,13 +27,19 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
-from s2r.fileio import atomic_write_bytes, atomic_write_npy
+from s2r.fileio import atomic_write_bytes, atomic_write_npy, atomic_write_text
+from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml
+from s2r.rectification import StereoRectification
 
 __all__ = [
     "IMAGE_SUFFIXES",
+    "depth_colour_with_bar",
     "depth_to_mm",
     "disparity_colour",
+    "limit_depth_range",
     "read_image",
+    "rectified_camera_info",
+    "write_camera_info",
     "write_depth_png",
     "write_disparity",
     "write_outputs",
@@ -74,6 +87,71 @@ def disparity_colour(disparity: NDArray[np.floating]) -> NDArray[np.uint8]:
     return np.asarray(colour, np.uint8)
 
 
+def _depth_of_disparity(Q: NDArray[np.float64], disparity: float) -> float:
+    """Depth (metres) of a disparity (pixels) through the reprojection matrix: ``Z = Q[2,3] / (Q[3,2] d + Q[3,3])``."""
+    w = float(Q[3, 2]) * disparity + float(Q[3, 3])
+    return float(Q[2, 3]) / w if w > 0 else float("inf")
+
+
+def _colour_bar(height: int, lo: float, hi: float, Q: NDArray[np.float64], *, width: int = 110) -> NDArray[np.uint8]:
+    """A (height, width, 3) panel: the JET bar (high disparity = near at the top) with depth labels in metres."""
+    panel = np.full((height, width, 3), 255, np.uint8)
+    top, bottom = 24, height - 24
+    ramp = np.linspace(255, 0, max(bottom - top, 2)).astype(np.uint8)[:, None]
+    bar = cv2.applyColorMap(np.repeat(ramp, 18, axis=1), cv2.COLORMAP_JET)
+    panel[top:top + bar.shape[0], 8:26] = bar
+    font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.4
+    cv2.putText(panel, "near", (30, 12), font, scale, (0, 0, 0), 1, cv2.LINE_AA)
+    cv2.putText(panel, "far", (30, height - 6), font, scale, (0, 0, 0), 1, cv2.LINE_AA)
+    ticks = 5 if bar.shape[0] >= 120 else 2
+    for i in range(ticks):
+        frac = i / (ticks - 1)
+        y = round(top + frac * (bar.shape[0] - 1))
+        z = _depth_of_disparity(Q, hi - frac * (hi - lo))
+        cv2.line(panel, (26, y), (32, y), (0, 0, 0), 1)
+        cv2.putText(panel, f"{z:.2f} m", (35, y + 4), font, scale, (0, 0, 0), 1, cv2.LINE_AA)
+    return panel
+
+
+def depth_colour_with_bar(disparity: NDArray[np.floating], Q: NDArray[np.float64]) -> NDArray[np.uint8]:
+    """:func:`disparity_colour` with a colour bar on the right giving the near and far depth in metres (via ``Q``)."""
+    image = disparity_colour(disparity)
+    valid = np.isfinite(disparity)
+    if not valid.any():
+        return image
+    lo, hi = float(np.min(disparity[valid])), float(np.max(disparity[valid]))
+    return np.ascontiguousarray(np.hstack([image, _colour_bar(image.shape[0], lo, hi, Q)]))
+
+
+def limit_depth_range(result: DepthResult, near_m: float, far_m: float) -> tuple[DepthResult, int]:
+    """``result`` with depths outside ``[near_m, far_m]`` made invalid (NaN depth and disparity, valid False).
+
+    Returns the new result and the number of pixels removed. Depth is along the rectified left optical axis.
+    """
+    with np.errstate(invalid="ignore"):
+        outside = result.valid & ((result.depth < near_m) | (result.depth > far_m))
+    removed = int(np.count_nonzero(outside))
+    if not removed:
+        return result, 0
+    depth, disparity = result.depth.copy(), result.disparity.copy()
+    depth[outside] = np.nan
+    disparity[outside] = np.nan
+    return replace(result, depth=depth, disparity=disparity, valid=result.valid & ~outside), removed
+
+
+def rectified_camera_info(rect: StereoRectification, *, name: str = "rectified_left") -> RosCameraInfo:
+    """The ROS camera_info of the rectified left camera: ``K = P1[:, :3]``, ``P = P1``, R identity, no distortion."""
+    width, height = rect.image_size
+    return RosCameraInfo(camera_name=name, width=int(width), height=int(height), K=np.array(rect.P1[:, :3]),
+                         D=np.zeros(5), distortion_model="plumb_bob", R=np.eye(3), P=np.array(rect.P1))
+
+
+def write_camera_info(path: str | Path, rect: StereoRectification, *, name: str = "rectified_left",
+                      force: bool = False) -> Path:
+    """Write :func:`rectified_camera_info` as camera_calibration_parsers YAML (atomic)."""
+    return atomic_write_text(path, camera_info_to_yaml(rectified_camera_info(rect, name=name)), force=force)
+
+
 def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
     ok, buf = cv2.imencode(".png", image)
     if not ok:
@@ -105,14 +183,20 @@ def write_ply(path: str | Path, points: NDArray[np.float32], colours: NDArray[np
 
 
 def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", ply: bool = False,
-                  force: bool = False) -> list[Path]:
-    """Write ``{prefix}disparity.npy``, ``depth.png``, ``depth_color.png`` (and ``points.ply``) into ``folder``."""
+                  force: bool = False, depth_range_m: tuple[float, float] | None = None) -> list[Path]:
+    """Write ``{prefix}disparity.npy``, ``depth.png``, ``depth_color.png`` (and ``points.ply``) into ``folder``.
+
+    ``depth_range_m`` ``(near, far)``: depths outside it are written as invalid (see :func:`limit_depth_range`).
+    """
     folder = Path(folder)
+    if depth_range_m is not None:
+        result, _ = limit_depth_range(result, *depth_range_m)
     colour_path = folder / f"{prefix}depth_color.png"
     written = [
         write_disparity(folder / f"{prefix}disparity.npy", result.disparity, force=force),
         write_depth_png(folder / f"{prefix}depth.png", result.depth, force=force),
-        atomic_write_bytes(colour_path, _png_bytes(disparity_colour(result.disparity), colour_path), force=force),
+        atomic_write_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q), colour_path),
+                           force=force),
     ]
     if ply:
         written.append(write_ply(folder / f"{prefix}points.ply", *result.point_cloud(), force=force))

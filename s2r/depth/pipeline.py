@@ -189,6 +189,10 @@ class StereoPipeline:
                 raw = pp.median(raw, invalid=invalid)
             elif stage == "close":
                 raw = pp.close(raw, invalid=invalid)
+            elif stage == "seed-median":
+                raw = pp.seed_median(raw)
+            elif stage == "seed-close":
+                raw = pp.seed_close(raw)
             else:
                 raw = pp.fill_background(raw, invalid=invalid)
         return raw

@@ -3,7 +3,7 @@
 A preset resolves against a profile into a :class:`MatcherConfig` (plain OpenCV parameter names, disparities in
 pixels). Presets with a fixed disparity range from their source (``seed-sgbm`` 112, ``ros-default`` 64) keep it
 unless ``num_disparities`` is given; the others derive it from the profile's nearest working depth
-(``fx' * B / z_min`` rounded up to 16). Either way a warning is logged when the range cannot see the profile's
+(``fx' * B / z_min + 1`` rounded up to 16). Either way a warning is logged when the range cannot see the profile's
 stated working range.
 """
 
@@ -26,7 +26,8 @@ log = logging.getLogger(__name__)
 #: Post-processing each preset applies when the caller gives none (names from s2r.depth.postprocess).
 DEFAULT_POSTPROCESS: dict[str, tuple[str, ...]] = {
     "profile": ("lr-check", "speckle", "median"),
-    "seed-sgbm": ("median", "close"),  # the seed: medianBlur 5, then a 3x3 morphological close
+    # The seed verbatim: medianBlur 5, then a 3x3 morphological close, on the whole disparity image.
+    "seed-sgbm": ("seed-median", "seed-close"),
     "fast": ("median",),
     "bm": (),
     "ros-default": (),
@@ -46,7 +47,8 @@ class MatcherConfig:
 
     ``algorithm`` is ``sgbm``/``sgbm_3way``/``hh``/``hh4`` (StereoSGBM modes) or ``bm`` (StereoBM);
     ``grey`` says whether the images are converted to grey before matching (colour SGBM uses 3 channels).
-    ``p1``/``p2`` None mean the usual ``8 * cn * block^2`` / ``32 * cn * block^2``.
+    ``p1``/``p2`` None mean the usual ``8 * cn * block^2`` / ``32 * cn * block^2``; ``pre_filter_cap`` None
+    leaves OpenCV's default (StereoSGBM: 0, which SGBM treats as 15 internally), as a call that never sets it.
     """
 
     algorithm: str
@@ -60,7 +62,7 @@ class MatcherConfig:
     uniqueness_ratio: int = 10
     speckle_window_size: int = 100
     speckle_range: int = 32
-    pre_filter_cap: int = 63
+    pre_filter_cap: int | None = 63
     pre_filter_size: int = 9
     texture_threshold: int = 10
 
@@ -90,10 +92,11 @@ def _base_config(preset: str, profile: StereoProfile, derived: int) -> MatcherCo
         nd = profile.matcher.num_disparities or derived
         return _from_settings(profile.matcher, nd)
     if preset == "seed-sgbm":
-        # The seed tutorial, verbatim: colour SGBM, numDisparities 112, P1 = 8*3*5^2, P2 = 32*3*5^2.
+        # The seed tutorial, verbatim: only the arguments it passes (colour SGBM, numDisparities 112,
+        # P1 = 8*3*5^2, P2 = 32*3*5^2, ...); preFilterCap and mode stay at OpenCV's defaults.
         return MatcherConfig(algorithm="sgbm", min_disparity=0, num_disparities=112, block_size=5, grey=False,
                              p1=8 * 3 * 25, p2=32 * 3 * 25, disp12_max_diff=1, uniqueness_ratio=10,
-                             speckle_window_size=100, speckle_range=32)
+                             speckle_window_size=100, speckle_range=32, pre_filter_cap=None)
     if preset == "fast":
         return MatcherConfig(algorithm="sgbm_3way", min_disparity=0, num_disparities=derived, block_size=5,
                              grey=True, disp12_max_diff=1, uniqueness_ratio=10, speckle_window_size=100,
@@ -120,7 +123,8 @@ def resolve_preset(
     :class:`DepthError` when it does not fit the image width.
     """
     z_min = profile.matcher.min_depth_m
-    needed = max(16, math.ceil(fx_px * baseline_m / z_min / 16.0) * 16)
+    # The largest disparity a range reaches is min_disparity + num_disparities - 1: z_min needs fB / z_min of it.
+    needed = max(16, math.ceil((fx_px * baseline_m / z_min + 1) / 16.0) * 16)
     width = profile.image_size[0]
     # A derived range never exceeds the image: clamp it (the warning below then says what is lost).
     derived = min(needed, max(16, (width - 1) // 16 * 16))
@@ -138,7 +142,7 @@ def resolve_preset(
     if nearest > z_min * 1.0001:
         log.warning("preset %s sees no nearer than %.3f m with %d disparities; the profile %s works from %.3f m "
                     "(it needs num_disparities=%d)", preset, nearest, config.num_disparities, profile.name, z_min,
-                    needed)
+                    max(16, math.ceil((fx_px * baseline_m / z_min + 1 - config.min_disparity) / 16.0) * 16))
     return config
 
 
@@ -147,7 +151,8 @@ def create_matcher(config: MatcherConfig) -> cv2.StereoBM | cv2.StereoSGBM:
     if config.algorithm == "bm":
         bm = cv2.StereoBM.create(config.num_disparities, config.block_size)
         bm.setMinDisparity(config.min_disparity)
-        bm.setPreFilterCap(config.pre_filter_cap)
+        if config.pre_filter_cap is not None:
+            bm.setPreFilterCap(config.pre_filter_cap)
         bm.setPreFilterSize(config.pre_filter_size)
         bm.setTextureThreshold(config.texture_threshold)
         bm.setUniquenessRatio(config.uniqueness_ratio)
@@ -156,9 +161,15 @@ def create_matcher(config: MatcherConfig) -> cv2.StereoBM | cv2.StereoSGBM:
         bm.setDisp12MaxDiff(config.disp12_max_diff)
         return bm
     p1, p2 = config.penalties
+    # Only what the config sets: a None preFilterCap and the default mode are left to OpenCV, so a preset that
+    # copies a call (seed-sgbm) builds exactly that call's matcher.
+    optional: dict[str, int] = {}
+    if config.pre_filter_cap is not None:
+        optional["preFilterCap"] = config.pre_filter_cap
+    if config.algorithm != "sgbm":
+        optional["mode"] = _SGBM_MODES[config.algorithm]
     return cv2.StereoSGBM.create(
         minDisparity=config.min_disparity, numDisparities=config.num_disparities, blockSize=config.block_size,
-        P1=p1, P2=p2, disp12MaxDiff=config.disp12_max_diff, preFilterCap=config.pre_filter_cap,
-        uniquenessRatio=config.uniqueness_ratio, speckleWindowSize=config.speckle_window_size,
-        speckleRange=config.speckle_range, mode=_SGBM_MODES[config.algorithm],
+        P1=p1, P2=p2, disp12MaxDiff=config.disp12_max_diff, uniquenessRatio=config.uniqueness_ratio,
+        speckleWindowSize=config.speckle_window_size, speckleRange=config.speckle_range, **optional,
     )

@@ -55,9 +55,11 @@ def run_sequence(
     force: bool = False,
     workers: int = 2,
     progress: ProgressCallback | None = None,
+    depth_range_m: tuple[float, float] | None = None,
 ) -> int:
     """Compute and write ``NN_disparity.npy``, ``NN_depth.png``, ``NN_depth_color.png`` (``NN_points.ply``)
-    for every pair, in order; returns the number of frames written. Errors (unreadable image, size mismatch)
+    for every pair, in order (depths outside ``depth_range_m`` invalid); returns the number of frames written.
+    Errors (unreadable image, size mismatch)
     propagate from the frame that failed; frames not yet started are cancelled."""
     out = Path(out_dir)
     total = len(pairs)
@@ -71,7 +73,8 @@ def run_sequence(
             read = reader.submit(_read_pair, left, right)
             computed = computer.submit(_compute_after, pipeline, read)
             prefix = frame_prefix(index, total)
-            pending.append(writer.submit(_write_after(out, computed, prefix, ply=ply, force=force)))
+            pending.append(writer.submit(_write_after(out, computed, prefix, ply=ply, force=force,
+                                                      depth_range_m=depth_range_m)))
             while len(pending) > 2 * workers + 2:
                 pending.popleft().result()
                 done += 1
@@ -94,6 +97,7 @@ def _compute_after(pipeline: StereoPipeline, read: Future[Pair]) -> DepthResult:
     return pipeline.compute(*read.result())
 
 
-def _write_after(out: Path, computed: Future[DepthResult], prefix: str, *, ply: bool, force: bool
-                 ) -> Callable[[], list[Path]]:
-    return lambda: write_outputs(out, computed.result(), prefix=prefix, ply=ply, force=force)
+def _write_after(out: Path, computed: Future[DepthResult], prefix: str, *, ply: bool, force: bool,
+                 depth_range_m: tuple[float, float] | None = None) -> Callable[[], list[Path]]:
+    return lambda: write_outputs(out, computed.result(), prefix=prefix, ply=ply, force=force,
+                                 depth_range_m=depth_range_m)

@@ -6,6 +6,7 @@ the format modules never leak a ``TypeError``, ``ValueError`` or pydantic ``Vali
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -38,13 +39,16 @@ __all__ = [
     "check_rotation_field",
     "distortion_for",
     "first_document",
+    "printed_decimals",
     "provenance_for",
     "read_text",
     "read_yaml",
     "require",
+    "rotation_as_printed",
 ]
 
 FloatArray = NDArray[np.float64]
+log = logging.getLogger(__name__)
 
 
 def read_text(path: str | Path) -> str:
@@ -137,6 +141,47 @@ def check_rotation_field(rot: FloatArray, path: str | Path, field: str) -> Float
     if abs(det - 1.0) > ORTHONORMAL_TOL:
         raise FormatError(f"not a rotation: determinant {det:.6f}, expected +1", path=path, field=field)
     return rot
+
+
+def printed_decimals(values: FloatArray) -> int:
+    """The most decimals any of ``values`` was printed with (17 when one needs full float precision)."""
+    most = 0
+    for value in np.asarray(values, dtype=np.float64).reshape(-1):
+        text = repr(float(value))
+        if "e" in text or "E" in text:
+            mantissa, _, exponent = text.lower().partition("e")
+            digits = len(mantissa.partition(".")[2].rstrip("0")) - int(exponent)
+        else:
+            digits = len(text.partition(".")[2].rstrip("0"))
+        most = max(most, digits)
+    return min(most, 17)
+
+
+def rotation_as_printed(rot: FloatArray, path: str | Path, field: str, *, zero_is_identity: bool = False) -> FloatArray:
+    """A rotation read from text printed with limited decimals: re-orthonormalised (SVD) when ``|R^T R - I|`` is
+    within what that precision explains, refused (FormatError naming the field) beyond it.
+
+    A file printing d decimals leaves each element off by up to 0.5e-d, so ``|R^T R - I|`` up to about 3e-d
+    (tolerance 4e-d, never below :data:`ORTHONORMAL_TOL`). ``zero_is_identity``: an all-zero matrix (some ROS
+    drivers publish R = 0 for an unrectified camera) is read as the identity with a warning.
+    """
+    if zero_is_identity and not np.any(rot):
+        log.warning("%s: %s is all zeros; read as the identity (an unrectified camera)", path, field)
+        return np.eye(3)
+    err = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
+    if err <= ORTHONORMAL_TOL and abs(float(np.linalg.det(rot)) - 1.0) <= ORTHONORMAL_TOL:
+        return rot
+    decimals = printed_decimals(rot)
+    tol = max(ORTHONORMAL_TOL, 4.0 * 10.0 ** -decimals)
+    if err > tol or float(np.linalg.det(rot)) <= 0:
+        return check_rotation_field(rot, path, field)  # raises with the measured error
+    u, _, vt = np.linalg.svd(rot)
+    fixed = np.asarray(u @ vt, dtype=np.float64)
+    change = float(np.max(np.abs(fixed - rot)))
+    level = logging.WARNING if change > 1e-4 else logging.INFO
+    log.log(level, "%s: %s re-orthonormalised: max |R^T R - I| = %.2e, as expected from %d printed decimals "
+            "(largest element change %.2e)", path, field, err, decimals, change)
+    return check_rotation_field(fixed, path, field)
 
 
 def distortion_for(model: str, coeffs: Sequence[float], path: str | Path, field: str) -> Distortion:

@@ -8,29 +8,37 @@ text. Every failure is an :class:`~s2r.errors.S2RError` naming the file and fiel
 
 from __future__ import annotations
 
+import logging
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Literal
 
 from s2r.errors import FormatError
 from s2r.formats._common import first_document, read_text, read_yaml
-from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr
+from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr, strip_yaml_directive
 from s2r.formats.realsense import is_realsense_text, load_realsense
 from s2r.formats.ros import is_camera_info_mapping, load_ros_pair
 from s2r.formats.s2r_yaml import load_profile_file
+from s2r.formats.zed import is_zed_conf, load_zed
 from s2r.profile import StereoProfile
 
-__all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any"]
+__all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any", "warn_implausible_baseline"]
 
-Format = Literal["s2r", "ros", "opencv", "kalibr", "realsense"]
+log = logging.getLogger(__name__)
+
+Format = Literal["s2r", "ros", "opencv", "kalibr", "realsense", "zed"]
 #: Human names of the formats, as used in messages and provenance.
 FORMAT_NAMES: dict[str, str] = {
     "s2r": "s2r profile YAML", "ros": "ROS camera_info", "opencv": "OpenCV FileStorage",
-    "kalibr": "Kalibr camchain", "realsense": "rs-enumerate-devices text",
+    "kalibr": "Kalibr camchain", "realsense": "rs-enumerate-devices text", "zed": "ZED SN*.conf",
 }
 _EXPECTED = (
-    "expected an s2r profile, ROS camera_info, OpenCV FileStorage, Kalibr camchain or rs-enumerate-devices -c text"
+    "expected an s2r profile, ROS camera_info, OpenCV FileStorage (stereo_calib, ORB-SLAM, VINS-Fusion, Kimera-VIO), "
+    "Kalibr camchain, ZED SN*.conf or rs-enumerate-devices -c text"
 )
+#: Baselines outside this range (metres) are reported as implausible.
+PLAUSIBLE_BASELINE_M = (0.002, 1.0)
 
 
 def _is_opencv(text: str) -> bool:
@@ -57,8 +65,10 @@ def detect_format(path: str | Path) -> Format:
         raise FormatError("is a folder without left.yaml and right.yaml", path=source,
                           hint="pass a calibration file, or a folder holding a ROS left.yaml/right.yaml pair")
     text = read_text(source)
+    if is_zed_conf(text):
+        return "zed"
     if _is_opencv(text):
-        return "opencv"
+        return "kalibr" if _is_kalibr_text(text, source) else "opencv"
     if _is_robot_description(source, text):
         raise FormatError("is a robot description (URDF / xacro / SDF), not a camera profile", path=source,
                           hint=f"derive a profile first: s2r profile from-urdf {source} -o profile.yaml")
@@ -79,9 +89,20 @@ def detect_format(path: str | Path) -> Format:
     raise FormatError(f"unrecognised format (top-level keys: {keys}); {_EXPECTED}", path=source)
 
 
+def _is_kalibr_text(text: str, path: Path) -> bool:
+    """A Kalibr camchain behind a ``%YAML:1.0`` line (OpenVINS writes them so): plain YAML once it is removed."""
+    if "opencv-matrix" in text or text.lstrip().startswith("<"):
+        return False
+    try:
+        data = read_yaml(strip_yaml_directive(text), path)
+    except FormatError:
+        return False
+    return is_kalibr_mapping(data)
+
+
 def _is_robot_description(path: Path, text: str) -> bool:
     """True for URDF, xacro and SDF files (by suffix, or by their root element)."""
-    if path.name.endswith((".urdf", ".xacro", ".sdf", ".world")):
+    if path.name.endswith((".urdf", ".xacro", ".sdf", ".world", ".gazebo")):
         return True
     head = text.lstrip()[:400]
     return head.startswith("<") and any(tag in head for tag in ("<robot", "<sdf", "<xacro:"))
@@ -120,6 +141,7 @@ def load_any(
     image_size: tuple[int, int] | None = None,
     t_scale_m: float = 1.0,
     resolution: tuple[int, int] | None = None,
+    cameras: tuple[str | None, str | None] = (None, None),
 ) -> StereoProfile:
     """Load a stereo profile from any supported format, detected from content.
 
@@ -130,20 +152,41 @@ def load_any(
         origin: provenance origin of imported profiles (``real``, ``sim`` or ``nominal``).
         image_size: ``(width, height)`` for OpenCV files that do not hold it.
         t_scale_m: metres per unit of an OpenCV file's T (its square size when calibrated in squares).
-        resolution: ``(width, height)`` of the RealSense infrared streams to import.
+        resolution: ``(width, height)`` of the RealSense infrared streams (or the ZED section) to import.
+        cameras: ``(left, right)`` camera names of a Kalibr camchain (``camN``); default cam0 and cam1.
+
+    A baseline that is implausible for the camera (under 2 mm, or over 1 m when near objects would leave the
+    image) is reported as a warning: a T in board squares or millimetres often looks like metres.
     """
     files = [Path(paths)] if isinstance(paths, (str, Path)) else [Path(p) for p in paths]
     if len(files) not in (1, 2):
         raise FormatError(f"expected one or two input files, got {len(files)}")
     fmts = [detect_format(p) for p in files]
     if len(files) == 2:
-        return _load_pair(files, fmts, name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m)
-    return _load_single(files[0], fmts[0], name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m,
-                        resolution=resolution)
+        profile = _load_pair(files, fmts, name=name, origin=origin, image_size=image_size, t_scale_m=t_scale_m)
+    else:
+        profile = _load_single(files[0], fmts[0], name=name, origin=origin, image_size=image_size,
+                               t_scale_m=t_scale_m, resolution=resolution, cameras=cameras)
+    warn_implausible_baseline(profile, files[-1])
+    return profile
+
+
+def warn_implausible_baseline(profile: StereoProfile, path: Path) -> None:
+    """Log a warning when the baseline does not fit the camera: under 2 mm, or over 1 m with the nearest depth
+    seen by both cameras (disparity half the image width: ``fx B / (W / 2)``) beyond 3 m."""
+    b = profile.baseline_m
+    near = profile.left.fx_px * b / (profile.left.width_px / 2.0)
+    if PLAUSIBLE_BASELINE_M[0] <= b <= PLAUSIBLE_BASELINE_M[1] or (b > PLAUSIBLE_BASELINE_M[1] and near <= 3.0):
+        return
+    log.warning("%s: baseline %.4g m is implausible for a %dx%d camera with %.1f deg HFOV (objects nearer than "
+                "%.3g m would shift by more than half the image); if T is in board squares or millimetres, pass "
+                "--units-m (metres per unit of T)", path, b, profile.left.width_px, profile.left.height_px,
+                math.degrees(profile.left.hfov_rad), near)
 
 
 def _load_single(source: Path, fmt: Format, *, name: str | None, origin: str, image_size: tuple[int, int] | None,
-                 t_scale_m: float, resolution: tuple[int, int] | None) -> StereoProfile:
+                 t_scale_m: float, resolution: tuple[int, int] | None,
+                 cameras: tuple[str | None, str | None]) -> StereoProfile:
     if fmt == "s2r":
         return _renamed(load_profile_file(source), name)
     if fmt == "ros":
@@ -156,5 +199,7 @@ def _load_single(source: Path, fmt: Format, *, name: str | None, origin: str, im
 
         return load_opencv(source, image_size=image_size, t_scale_m=t_scale_m, name=name, origin=origin)
     if fmt == "kalibr":
-        return load_kalibr(source, name=name, origin=origin)
+        return load_kalibr(source, name=name, origin=origin, left=cameras[0], right=cameras[1])
+    if fmt == "zed":
+        return load_zed(source, resolution=resolution, name=name, origin=origin)
     return load_realsense(source, resolution=resolution, name=name, origin=origin)

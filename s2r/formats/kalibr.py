@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from s2r.errors import FormatError
 from s2r.fileio import atomic_write_text
@@ -23,21 +24,23 @@ from s2r.formats._common import (
     as_matrix,
     build_camera,
     build_stereo,
-    check_rotation_field,
     distortion_for,
     provenance_for,
     read_text,
     read_yaml,
     require,
+    rotation_as_printed,
 )
+from s2r.geometry import invert_transform
 from s2r.profile import Camera, StereoProfile
 
-__all__ = ["dump_kalibr", "is_kalibr_mapping", "kalibr_to_yaml", "load_kalibr"]
+__all__ = ["dump_kalibr", "is_kalibr_mapping", "kalibr_to_yaml", "load_kalibr", "strip_yaml_directive"]
 
 log = logging.getLogger(__name__)
+FloatArray = NDArray[np.float64]
 
 _KNOWN_KEYS = {"camera_model", "intrinsics", "distortion_model", "distortion_coeffs", "resolution", "rostopic",
-               "cam_overlaps", "T_cn_cnm1", "T_cam_imu", "timeshift_cam_imu", "line_delay"}
+               "cam_overlaps", "T_cn_cnm1", "T_cam_imu", "T_imu_cam", "timeshift_cam_imu", "line_delay"}
 
 
 def is_kalibr_mapping(data: Any) -> bool:
@@ -82,24 +85,96 @@ def _camera(data: dict[Any, Any], key: str, path: Path) -> Camera:
     return build_camera(K=K, size=(width, height), distortion=distortion, path=path, field=f"{key}.intrinsics")
 
 
+def strip_yaml_directive(text: str) -> str:
+    """``text`` without the ``%YAML:1.0`` line that OpenCV-minded tools (every OpenVINS config) prepend, which
+    a YAML 1.1 parser refuses, and without a ``---`` document start right after it."""
+    lines = text.splitlines()
+    while lines and (lines[0].lstrip().startswith("%YAML") or not lines[0].strip()):
+        lines.pop(0)
+    if lines and lines[0].strip() == "---":
+        lines.pop(0)
+    return "\n".join(lines)
+
+
+def _transform(data: dict[Any, Any], key: str, field: str, path: Path) -> FloatArray:
+    transform = as_matrix(require(data[key], field, path, prefix=f"{key}."), (4, 4), path, f"{key}.{field}")
+    if np.max(np.abs(transform[3] - np.array([0.0, 0.0, 0.0, 1.0]))) > 1e-9:
+        raise FormatError("last row must be [0, 0, 0, 1]", path=path, field=f"{key}.{field}")
+    transform[:3, :3] = rotation_as_printed(transform[:3, :3], path, f"{key}.{field}")
+    return transform
+
+
+def _cam_from_imu(data: dict[Any, Any], key: str, path: Path) -> FloatArray | None:
+    """``T_cam_imu`` of ``key`` (Kalibr's camchain-imucam), or the inverse of OpenVINS' ``T_imu_cam``."""
+    if "T_cam_imu" in data[key]:
+        return _transform(data, key, "T_cam_imu", path)
+    if "T_imu_cam" in data[key]:
+        return invert_transform(_transform(data, key, "T_imu_cam", path))
+    return None
+
+
+def _index(key: str) -> int | None:
+    return int(key[3:]) if key.startswith("cam") and key[3:].isdigit() else None
+
+
+def _right_from_left(data: dict[Any, Any], left: str, right: str, path: Path) -> tuple[FloatArray, str]:
+    """``T_right_left`` (OpenCV ``[R | T]``) and how it was obtained: the ``T_cn_cnm1`` chain from ``left`` up to
+    ``right``, else ``T_right_imu @ inv(T_left_imu)``."""
+    i, j = _index(left), _index(right)
+    if i is not None and j is not None and j > i and all("T_cn_cnm1" in data.get(f"cam{n}", {})
+                                                         for n in range(i + 1, j + 1)):
+        T = np.eye(4)
+        for n in range(i + 1, j + 1):
+            T = _transform(data, f"cam{n}", "T_cn_cnm1", path) @ T
+        return T, "T_cn_cnm1" if j == i + 1 else f"the T_cn_cnm1 chain cam{i + 1}..cam{j}"
+    left_imu, right_imu = _cam_from_imu(data, left, path), _cam_from_imu(data, right, path)
+    if left_imu is not None and right_imu is not None:
+        return right_imu @ invert_transform(left_imu), "T_cam_imu of both cameras (T_c1_c0 = T_c1_imu inv(T_c0_imu))"
+    raise FormatError(f"no extrinsics between {left} and {right}: {right} has no T_cn_cnm1 and the cameras do not "
+                      "both have T_cam_imu / T_imu_cam", path=path, field=f"{right}.T_cn_cnm1",
+                      hint="pass a camchain with T_cn_cnm1, or a camchain-imucam with T_cam_imu for both cameras")
+
+
+def _choose(data: dict[Any, Any], left: str | None, right: str | None, path: Path) -> tuple[str, str]:
+    cams = sorted((k for k in data if isinstance(k, str) and _index(k) is not None), key=lambda k: _index(k) or 0)
+    if left is None and right is None:
+        left, right = "cam0", "cam1"
+        if len(cams) > 2:
+            log.warning("%s: %d cameras (%s); using cam0 as left and cam1 as right (choose with --left camN "
+                        "--right camM)", path, len(cams), ", ".join(cams))
+    for option, key in (("--left", left), ("--right", right)):
+        if key not in data:
+            raise FormatError(f"no camera {key!r} (cameras: {', '.join(cams) or 'none'})", path=path, field=option,
+                              hint="pass --left camN --right camM with two of the listed cameras")
+    assert left is not None and right is not None
+    if left == right:
+        raise FormatError("--left and --right name the same camera", path=path, field="--right")
+    return left, right
+
+
 def load_kalibr(
-    path: str | Path, *, name: str | None = None, origin: str = "real", left: str = "cam0", right: str = "cam1"
+    path: str | Path, *, name: str | None = None, origin: str = "real", left: str | None = None,
+    right: str | None = None,
 ) -> StereoProfile:
-    """A stereo profile from a Kalibr camchain: ``left``/``right`` cameras, ``right.T_cn_cnm1`` as ``[R | T]``."""
+    """A stereo profile from a Kalibr camchain (``%YAML:1.0`` first line accepted, as OpenVINS writes it).
+
+    ``left``/``right`` name the cameras (default cam0 and cam1; a chain with more cameras says which were used).
+    Extrinsics: ``right.T_cn_cnm1`` (or the chain of them) as ``[R | T]``, else from ``T_cam_imu`` (Kalibr
+    camchain-imucam) or ``T_imu_cam`` (OpenVINS): ``T_c1_c0 = T_c1_imu inv(T_c0_imu)``.
+    """
     source = Path(path)
-    data = read_yaml(read_text(source), source)
+    data = read_yaml(strip_yaml_directive(read_text(source)), source)
     if not isinstance(data, dict):
         raise FormatError("expected a mapping with cam0 and cam1", path=source, hint="is this a Kalibr camchain?")
-    lcam, rcam = _camera(data, left, source), _camera(data, right, source)
-    field = f"{right}.T_cn_cnm1"
-    transform = as_matrix(require(data[right], "T_cn_cnm1", source, prefix=f"{right}."), (4, 4), source, field)
-    if np.max(np.abs(transform[3] - np.array([0.0, 0.0, 0.0, 1.0]))) > 1e-9:
-        raise FormatError("last row must be [0, 0, 0, 1]", path=source, field=field)
-    R = check_rotation_field(transform[:3, :3], source, field)
+    lkey, rkey = _choose(data, left, right, source)
+    lcam, rcam = _camera(data, lkey, source), _camera(data, rkey, source)
+    transform, how = _right_from_left(data, lkey, rkey, source)
+    log.info("%s: left %s, right %s; extrinsics from %s", source, lkey, rkey, how)
     return build_stereo(
-        name=name or source.stem, left=lcam, right=rcam, R=R, T=transform[:3, 3].copy(), path=source,
-        provenance=provenance_for([source], "Kalibr camchain", origin=origin),
-        description=f"imported from Kalibr camchain {source.name}",
+        name=name or source.stem, left=lcam, right=rcam, R=transform[:3, :3].copy(), T=transform[:3, 3].copy(),
+        path=source, provenance=provenance_for([source], "Kalibr camchain", origin=origin,
+                                               notes=f"left {lkey}, right {rkey}; extrinsics from {how}"),
+        description=f"imported from Kalibr camchain {source.name} ({lkey} + {rkey})",
     )
 
 

@@ -1,4 +1,6 @@
-"""OpenCV FileStorage (YAML or XML) as OpenCV's stereo_calib sample writes it, read and written by cv2.FileStorage.
+"""OpenCV FileStorage (YAML or XML) as OpenCV's stereo_calib sample writes it.
+
+Read by s2r's safe reader (formats/filestorage.py, never cv2.FileStorage); written by cv2.FileStorage.
 
 Nodes: ``M1 D1 M2 D2`` (camera matrices and distortion), ``R T`` (OpenCV extrinsics,
 ``X_right = R X_left + T``), optionally ``R1 R2 P1 P2 Q`` (rectification; ignored on import, recomputed
@@ -14,7 +16,6 @@ square size of 1 unless told otherwise, so its T is in SQUARES: pass ``t_scale_m
 from __future__ import annotations
 
 import logging
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,16 +35,20 @@ from s2r.formats._common import (
     check_rotation_field,
     distortion_for,
     provenance_for,
-    read_text,
+    rotation_as_printed,
 )
+from s2r.formats.filestorage import read_filestorage
+from s2r.formats.slam_settings import flavour_of, load_settings
 from s2r.profile import Camera, Distortion, StereoProfile
 from s2r.rectification import stereo_rectification
 
-__all__ = ["OpenCVStereo", "dump_opencv", "load_opencv", "opencv_to_text", "read_opencv_stereo"]
+__all__ = [
+    "OpenCVStereo", "dump_opencv", "load_opencv", "opencv_to_text", "read_filestorage_nodes", "read_opencv_stereo",
+]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
-NodeValue = FloatArray | str | float
+NodeValue = FloatArray | str | float | dict[str, Any]
 #: Matrix nodes of OpenCV's stereo sample and their shapes (None: any shape, checked later).
 _MATRIX_SHAPES: dict[str, tuple[int, int] | None] = {
     "M1": (3, 3), "M2": (3, 3), "D1": None, "D2": None, "R": None, "T": None,
@@ -64,48 +69,35 @@ class OpenCVStereo:
     image_size: tuple[int, int] | None
     distortion_model: str | None
     paths: tuple[Path, ...]
+    rectified: tuple[FloatArray, FloatArray] | None = None
 
 
-def _cv_message(exc: BaseException) -> str:
-    """The useful tail of a cv2.error text (``file(line): what``), on one line."""
-    cause = exc.__cause__ if exc.__cause__ is not None else exc
-    text = " ".join(str(cause).split())
-    found = re.search(r"in function '[^']*?\((\d+)\): (.*)'", text)
-    if found:
-        return f"line {found.group(1)}: {found.group(2)}"
-    found = re.search(r"error: \(-?\d+:([^)]*)\) (.*)", text)
-    return f"{found.group(1)}: {found.group(2)}" if found else text
+#: Other names the same stereo nodes go by (OpenCV's stereoCalibrate argument names, tutorials' K1 D1 K2 D2).
+_ALIASES: dict[str, tuple[str, ...]] = {"M1": ("K1", "cameraMatrix1", "CM1", "camera_matrix_left"),
+                                        "M2": ("K2", "cameraMatrix2", "CM2", "camera_matrix_right"),
+                                        "D1": ("distCoeffs1", "dist_coeffs_left"), "D2": ("distCoeffs2",
+                                                                                          "dist_coeffs_right")}
 
 
-def _node_value(node: Any) -> NodeValue | None:
-    if node.isString():
-        return str(node.string())
-    if node.isInt() or node.isReal():
-        return float(node.real())
-    if node.isSeq():
-        return np.array([node.at(i).real() for i in range(node.size())], dtype=np.float64)
-    mat = node.mat()
-    return None if mat is None else np.asarray(mat, dtype=np.float64)
+def _with_aliases(nodes: dict[str, NodeValue | None]) -> dict[str, NodeValue | None]:
+    out = dict(nodes)
+    for canonical, names in _ALIASES.items():
+        found = next((n for n in names if n in nodes), None)
+        if canonical not in out and found is not None:
+            out[canonical] = nodes[found]
+    return out
+
+
+def read_filestorage_nodes(path: Path) -> dict[str, Any]:
+    """Every top-level node of an OpenCV FileStorage file (matrices as float64 arrays, maps as dicts)."""
+    return _read_nodes(path)
 
 
 def _read_nodes(path: Path) -> dict[str, NodeValue | None]:
-    """Every top-level node of a FileStorage file; a parse error becomes a one-line FormatError."""
-    read_text(path)  # missing / unreadable file -> FormatError before cv2 logs its own complaint
-    try:
-        storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-        if not storage.isOpened():
-            raise FormatError("OpenCV cannot open this file as FileStorage", path=path)
-        root = storage.root()
-        if not root.isMap():
-            raise FormatError("no named nodes found (expected M1, D1, M2, D2, R, T)", path=path,
-                              hint="is this an OpenCV FileStorage file?")
-        nodes = {str(key): _node_value(storage.getNode(key)) for key in root.keys()}  # noqa: SIM118 (cv2.FileNode)
-        storage.release()
-    except FormatError:
-        raise
-    except Exception as exc:  # cv2.error, or SystemError wrapping it
-        raise FormatError(f"malformed or truncated OpenCV FileStorage: {_cv_message(exc)}", path=path,
-                          hint="re-export the file from OpenCV") from None
+    """Every top-level node of a FileStorage file, read by s2r's safe reader (never cv2.FileStorage, which
+    corrupts memory on some malformed files), with the stereo nodes' other names mapped; a bad file becomes a
+    one-line FormatError."""
+    nodes = _with_aliases(read_filestorage(path))
     _check_matrix_nodes(nodes, path)
     return nodes
 
@@ -166,8 +158,10 @@ def read_opencv_stereo(paths: str | Path | Sequence[str | Path]) -> OpenCVStereo
     for key in ("M1", "D1", "M2", "D2"):
         value = _array(nodes, key, where(key))
         if value is None:
-            raise FormatError("required matrix is missing (OpenCV stereo files hold M1 D1 M2 D2)", path=where(key),
-                              field=key, hint="pass the stereo sample's intrinsics.yml")
+            found = ", ".join(sorted(nodes)[:8]) or "nothing"
+            raise FormatError(f"required matrix is missing: OpenCV stereo files hold M1 D1 M2 D2 (or K1 D1 K2 D2); "
+                              f"this file has {found}", path=where(key), field=key,
+                              hint="pass the intrinsics file (M1 D1 M2 D2) together with the extrinsics file")
         required[key] = value
     for key in ("M1", "M2"):
         required[key] = as_matrix(required[key].tolist(), (3, 3), where(key), key)
@@ -176,7 +170,7 @@ def read_opencv_stereo(paths: str | Path | Sequence[str | Path]) -> OpenCVStereo
     model = nodes.get("distortion_model")
     return OpenCVStereo(
         M1=required["M1"], D1=required["D1"], M2=required["M2"], D2=required["D2"],
-        R=_rotation(nodes, where("R")), T=_translation(nodes, where("T")),
+        R=_rotation(nodes, where("R")), T=_translation(nodes, where("T")), rectified=_rectified(nodes, where("P2")),
         image_size=_image_size(nodes, where("image_width")), distortion_model=model if isinstance(model, str) else None,
         paths=tuple(files),
     )
@@ -189,6 +183,22 @@ def _rotation(nodes: dict[str, NodeValue | None], path: Path) -> FloatArray | No
     if value.size == 3:  # a Rodrigues rotation vector
         value = np.asarray(cv2.Rodrigues(value.reshape(3, 1))[0], dtype=np.float64)
     return check_rotation_field(as_matrix(value.tolist(), (3, 3), path, "R"), path, "R")
+
+
+def _rectified(nodes: dict[str, NodeValue | None], path: Path) -> tuple[FloatArray, FloatArray] | None:
+    """``(R, T)`` from a factory calibration's ``R1 P1 R2 P2`` alone (MultiSense): as from ROS camera_info,
+    ``R = R2^T R1``, ``T = R2^T (t2 - t1)`` with ``t = K'^-1 P[:, 3]`` (P's Tx in metres)."""
+    if not all(isinstance(nodes.get(k), np.ndarray) for k in ("R1", "R2", "P1", "P2")):
+        return None
+    arrays = {k: _array(nodes, k, path) for k in ("R1", "R2", "P1", "P2")}
+    R1, R2 = (rotation_as_printed(np.asarray(arrays[k]), path, k) for k in ("R1", "R2"))
+    offsets = []
+    for key in ("P1", "P2"):
+        P = np.asarray(arrays[key])
+        if abs(float(np.linalg.det(P[:, :3]))) < 1e-12:
+            raise FormatError("left 3x3 block of P is singular", path=path, field=key)
+        offsets.append(np.linalg.solve(P[:, :3], P[:, 3]))
+    return R2.T @ R1, R2.T @ (offsets[1] - offsets[0])
 
 
 def _translation(nodes: dict[str, NodeValue | None], path: Path) -> FloatArray | None:
@@ -233,24 +243,30 @@ def load_opencv(
         image_size: ``(width, height)`` in pixels when the files do not hold it.
         t_scale_m: metres per unit of the file's T (the square size when calibrated in squares).
     """
-    data = read_opencv_stereo(paths)
+    files = [Path(paths)] if isinstance(paths, (str, Path)) else [Path(p) for p in paths]
+    node_sets = [_read_nodes(p) for p in files]
+    flavour = flavour_of(node_sets[0])
+    if flavour is not None:  # ORB-SLAM, VINS-Fusion, Kimera-VIO settings: their own field names
+        return load_settings(files, node_sets, flavour, read_filestorage_nodes, name=name, origin=origin)
+    data = read_opencv_stereo(files)
     first = data.paths[0]
     size = data.image_size or image_size
     if size is None:
         raise FormatError("image size not in the file", path=first, field="image_width/image_height",
                           hint="pass --image-size WIDTHxHEIGHT")
-    if data.R is None or data.T is None:
+    R, T_file = data.R, data.T
+    if (R is None or T_file is None) and data.rectified is not None:
+        R, T_file = data.rectified
+        log.info("%s: R and T recovered from R1 P1 R2 P2 (P's Tx taken in metres)", first)
+    if R is None or T_file is None:
         raise FormatError("holds intrinsics only (M1 D1 M2 D2), no extrinsics R and T", path=first,
                           field="R" if data.R is None else "T",
                           hint="pass the extrinsics.yml written with it as a second file")
     if not (t_scale_m > 0 and np.isfinite(t_scale_m)):
         raise FormatError(f"T scale must be a positive number of metres, got {t_scale_m}", field="--units-m")
-    T = data.T * t_scale_m
-    if float(np.linalg.norm(T)) > 5.0:
-        log.warning("%s: |T| = %.3g m is implausibly long; if T is in squares or mm pass --units-m", first,
-                    float(np.linalg.norm(T)))
+    T = T_file * t_scale_m
     return build_stereo(
-        name=name or first.stem, left=_camera(data, 1, size), right=_camera(data, 2, size), R=data.R, T=T,
+        name=name or first.stem, left=_camera(data, 1, size), right=_camera(data, 2, size), R=R, T=T,
         path=data.paths[-1], provenance=provenance_for(
             data.paths, "OpenCV FileStorage", origin=origin,
             notes="" if t_scale_m == 1.0 else f"T multiplied by {t_scale_m:g} (metres per unit of the file's T)"),

@@ -248,9 +248,13 @@ def load_realsense(
 
     Args:
         resolution: ``(width, height)``; default 848x480 (Intel's recommended depth mode) or the only one.
-        left, right: the stream names of the left and right imagers.
+        left, right: the stream names of the left and right imagers (``Infrared_1`` / ``Infrared_2``, as newer
+            librealsense prints them, are used when the file has no ``Infrared 1``).
     """
     source = Path(path)
+    text = read_text(source)
+    if (left, right) == ("Infrared 1", "Infrared 2") and f'"{left}"' not in text and '"Infrared_1"' in text:
+        left, right = "Infrared_1", "Infrared_2"  # newer librealsense names the streams with an underscore
     intrinsics, extrinsics = parse_realsense(source, streams={left, right})
     size = _resolution(intrinsics, left, right, resolution, source)
     lcam = _camera(_pick(intrinsics, left, size), source, "camera_infra1_optical_frame")

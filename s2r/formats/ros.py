@@ -29,14 +29,15 @@ from s2r.formats._common import (
     as_matrix,
     build_camera,
     build_stereo,
-    check_rotation_field,
     distortion_for,
     first_document,
     provenance_for,
     read_text,
     read_yaml,
     require,
+    rotation_as_printed,
 )
+from s2r.geometry import baseline_layout_problem
 from s2r.profile import Camera, StereoProfile
 
 __all__ = [
@@ -152,7 +153,7 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
         raise FormatError(f"expected a model name, got {type(model).__name__}", path=source, field=keys["model"])
     coeffs = _coefficients(data, keys["D"], source)
     distortion = distortion_for(model, coeffs, source, keys["D"])
-    R = check_rotation_field(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"])
+    R = rotation_as_printed(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"], zero_is_identity=True)
     P = _matrix_field(data, keys["P"], (3, 4), source)
     build_camera(K=K, size=(width, height), distortion=distortion, path=source, field=keys["K"])
     header = data.get("header")
@@ -217,7 +218,19 @@ def ros_pair_from_profile(profile: StereoProfile, *, alpha: float = 0.0) -> tupl
     """The left and right camera_info of a profile's rectified pair (``alpha`` as in stereoRectify)."""
     from s2r.rectification import stereo_rectification  # local: reading camera_info needs no OpenCV
 
+    problem = baseline_layout_problem(-profile.R.T @ profile.T)  # the right camera in the left optical frame
+    if problem is not None:
+        raise FormatError(f"[{problem[0]}] {problem[1]}: its rectified camera_info would be unusable",
+                          field="extrinsics", hint="fix the profile's R and T (s2r lint shows the fix for a robot "
+                          "description); a ROS stereo pair needs the right camera to the right of the left one")
     rect = stereo_rectification(profile, alpha=alpha)
+    fx_rect, tx, ty = float(rect.P1[0, 0]), float(rect.P2[0, 3]), float(rect.P2[1, 3])
+    fx_raw = min(profile.left.fx_px, profile.right.fx_px)
+    if not (np.isfinite(rect.P1).all() and np.isfinite(rect.P2).all()) or not 0.2 * fx_raw < fx_rect < 5 * fx_raw \
+            or (tx >= 0 and abs(tx) >= abs(ty)):  # a vertical pair (|ty| > |tx|) is a valid rectified pair too
+        raise FormatError(f"rectification gives fx' = {fx_rect:.6g} px and Tx = {tx:.6g} (raw fx {fx_raw:.6g} px): "
+                          "the camera_info would be unusable", field="extrinsics",
+                          hint="check the profile's R and T: the cameras must look the same way, side by side")
     infos = []
     for side, cam, R, P in (("left", profile.left, rect.R1, rect.P1), ("right", profile.right, rect.R2, rect.P2)):
         infos.append(RosCameraInfo(

@@ -11,7 +11,8 @@ Rules (code: severity):
   disagree with ``horizontal_fov``.
 - ``hack-baseline`` (error/warning/info): missing, on the wrong camera, wrong sign or wrong size.
 - ``near-clip`` (warning): the near clip plane is farther than the matcher's closest working depth.
-- ``movable-joint`` / ``optical-link`` (warning): geometry taken at joint zero; a sensor on an optical link.
+- ``movable-joint`` / ``optical-link`` (warning): geometry taken at joint zero; a sensor on an ``*_optical`` link
+  that renders along another axis than the link's +z (decided from the poses, as Gazebo renders).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import numpy as np
 from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
 from s2r.sources.description import CameraSpec, Description
 from s2r.sources.lint_geometry import baseline_findings
-from s2r.sources.loader import StereoPair, load_description, stereo_pair
+from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
 from s2r.sources.profile_builder import seed_matcher
 
 __all__ = ["SEVERITIES", "Finding", "lint_description"]
@@ -118,6 +119,22 @@ def _focal_rules(report: _Report, camera: CameraSpec) -> None:
                    f"fy {lens.fy:g} px disagree with horizontal_fov {camera.hfov_rad} rad (fx = {f:.3f} px): gz-sim "
                    "renders the intrinsics, Gazebo classic the FOV", f"set horizontal_fov to "
                    f"{hfov_from_focal(camera.width, lens.fx):.6f} or fx = fy = {f:.3f}", lens.line, "<intrinsics>")
+
+
+def _optical_link_rule(report: _Report, camera: CameraSpec) -> None:
+    """A sensor on a ``*_optical`` link whose rendered viewing axis is not the link's +z (decided from the poses)."""
+    if not camera.link_is_optical:
+        return
+    axis = optical_pose(camera)[:3, 2]  # the rendered viewing direction, in link coordinates
+    angle = math.degrees(math.acos(max(-1.0, min(1.0, float(axis[2])))))
+    if angle < 0.1:
+        return
+    shown = " ".join(f"{v:+.3f}" for v in axis)
+    report.add("warning", "optical-link", f"sensor {camera.sensor_name!r} is on optical-frame link {camera.link!r} "
+               f"but Gazebo renders along its camera frame's +x, the link's ({shown}) direction: {angle:.1f} deg "
+               "off the link's +z (the axis its name promises)", "attach the sensor to the camera body link (x "
+               "forward), or give the sensor <pose> the rotation 0 -1.5708 1.5708 that turns +x onto the link's +z",
+               camera.lines.get("sensor"), f'reference="{camera.link}"')
 
 
 def _hack_rules(report: _Report, pair: StereoPair) -> None:
@@ -256,11 +273,7 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
                    "links; its position 0 is assumed", "make it fixed if the cameras are rigidly mounted",
                    joint.line, f'name="{joint.name}"')
     for camera in (pair.left, pair.right):
-        if camera.link_is_optical:
-            report.add("warning", "optical-link", f"sensor {camera.sensor_name!r} is on optical-frame link "
-                       f"{camera.link!r}: Gazebo renders along the link's +x, not its +z", "attach the sensor "
-                       "to the camera body link (x forward) and publish the optical frame via frameName",
-                       camera.lines.get("sensor"), f'reference="{camera.link}"')
+        _optical_link_rule(report, camera)
         _focal_rules(report, camera)
     for severity, code, message, fix, line, needles in baseline_findings(description, pair):
         report.add(severity, code, message, fix, line, *needles)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from s2r.geometry import invert_transform, make_transform, rpy_from_rotation
+from s2r.geometry import baseline_layout_problem, invert_transform, make_transform, rpy_from_rotation
 from s2r.sources.description import Description, FloatArray
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.loader import StereoPair, optical_pose
@@ -82,21 +82,15 @@ def rectified_area_kept(description: Description, pair: StereoPair) -> tuple[flo
 def baseline_findings(description: Description, pair: StereoPair) -> list[RawFinding]:
     """``baseline-axis`` (error), ``baseline-side`` (error) and ``baseline-offset`` (warning) findings."""
     t = pair.T_left_right[:3, 3]
-    b = float(np.linalg.norm(t))
     fix, line, needles = corrected_placement(description, pair)
-    if b < 1e-6:
-        return [("error", "baseline-axis", f"zero baseline: both cameras sit at the same place; corrected: {fix}", fix,
-                 line, needles)]
+    problem = baseline_layout_problem(t)
+    if problem is not None:
+        code, message = problem
+        if code == "baseline-side":
+            return [("error", code, message, "swap --left and --right (or the camera names), or " + fix, line,
+                     needles)]
+        return [("error", code, f"{message}; corrected: {fix}", fix, line, needles)]
     tx, ty, tz = (float(v) for v in t)
-    if abs(tz) >= b * math.sqrt(0.5):
-        where = "behind" if tz < 0 else "in front of"
-        return [("error", "baseline-axis", f"baseline along the optical axis: the right camera is {abs(tz) * 100:.1f} "
-                 f"cm {where} the left one along its viewing axis ({abs(tx) * 100:.1f} cm sideways): no stereo "
-                 f"disparity; corrected: {fix}", fix, line, needles)]
-    if tx < 0 and abs(tx) >= b * math.sqrt(0.5):
-        return [("error", "baseline-side", f"the 'right' camera is {abs(tx) * 100:.1f} cm to the LEFT of the left "
-                 "camera (disparities would be negative)", "swap --left and --right (or the camera names), or "
-                 + fix, line, needles)]
     if abs(ty) < 1e-9 and abs(tz) < 1e-9:
         return []
     kept, ideal = rectified_area_kept(description, pair)

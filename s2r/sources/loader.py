@@ -108,25 +108,24 @@ def select_pair(description: Description, *, left: str | None = None,
     return first, second
 
 
-def optical_pose(camera: CameraSpec, *, optical: bool | None = None) -> FloatArray:
-    """``T_link_optical``: the camera's optical frame (z forward, x right, y down) in its link frame.
+def optical_pose(camera: CameraSpec) -> FloatArray:
+    """``T_link_optical``: the optical frame (z forward, x right, y down) of what Gazebo renders, in the link frame.
 
-    ``optical`` True says the link (with the sensor pose) already is the optical frame; None decides by
-    the link's name (``*_optical``, ``*_optical_frame``).
+    Gazebo (classic and gz-sim) renders along the +x axis of the camera frame (the link frame composed with
+    the sensor's and the camera's ``<pose>``), whatever the link is called: the optical frame is always that
+    frame rotated by rpy (-pi/2, 0, -pi/2). A sensor on a link named ``*_optical`` whose pose rotation undoes
+    the optical rotation (the pointgrey Bumblebee2 / Flea3 macros) therefore comes out as the link itself.
     """
-    is_optical = camera.link_is_optical if optical is None else optical
-    return camera.T_link_camera if is_optical else camera.T_link_camera @ T_LINK_OPTICAL
+    return camera.T_link_camera @ T_LINK_OPTICAL
 
 
-def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpec, *,
-                         optical: bool | None = None) -> FloatArray:
+def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpec) -> FloatArray:
     """``T_left_right`` between the two cameras' optical frames (metres), movable joints at zero."""
     T_links, _ = tree.transform(left.link, right.link)
-    return invert_transform(optical_pose(left, optical=optical)) @ T_links @ optical_pose(right, optical=optical)
+    return invert_transform(optical_pose(left)) @ T_links @ optical_pose(right)
 
 
-def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None,
-                optical: bool | None = None) -> StereoPair:
+def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None) -> StereoPair:
     """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path."""
     cam_left, cam_right = select_pair(description, left=left, right=right)
     tree = KinematicTree(description)
@@ -134,5 +133,5 @@ def stereo_pair(description: Description, *, left: str | None = None, right: str
     for joint in movable:
         logger.warning("%s: joint %r (%s) between the camera links is taken at position 0", description.path,
                        joint.name, joint.type)
-    T = optical_pose_between(tree, cam_left, cam_right, optical=optical)
+    T = optical_pose_between(tree, cam_left, cam_right)
     return StereoPair(cam_left, cam_right, T, tuple(movable))

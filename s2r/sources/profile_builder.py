@@ -8,6 +8,7 @@ import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 from pydantic import ValidationError
 
 from s2r.errors import SourceError
@@ -25,7 +26,7 @@ from s2r.profile import (
 )
 from s2r.sources.conventions import check_convention, gazebo_to_opencv_distortion, intrinsics_for
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
-from s2r.sources.loader import StereoPair, load_description, stereo_pair
+from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
 
 __all__ = ["SEED_SGBM", "load_description_profile", "profile_from_pair", "seed_matcher"]
 
@@ -67,14 +68,22 @@ def _distortion(spec: CameraSpec, fx: float, fy: float) -> Distortion:
     return Distortion(model="plumb_bob", coefficients=fit.coefficients)
 
 
-def _camera(spec: CameraSpec, convention: str, optical: bool) -> Camera:
+def renders_as_link(spec: CameraSpec, *, tol_rad: float = 1e-3) -> bool:
+    """True when the rendered optical frame is the camera's link frame itself (same origin, axes within
+    ``tol_rad``): then the link (typically ``*_optical``) is the frame the images belong to."""
+    T = optical_pose(spec)
+    cos_angle = (float(np.trace(T[:3, :3])) - 1.0) / 2.0
+    return float(np.linalg.norm(T[:3, 3])) < 1e-9 and math.acos(max(-1.0, min(1.0, cos_angle))) < tol_rad
+
+
+def _camera(spec: CameraSpec, convention: str) -> Camera:
     if spec.lens is not None and convention != "gz-sim":
         logger.warning("camera %r: <lens><intrinsics> is only honoured by gz-sim; the %s convention uses "
                        "horizontal_fov", spec.name, convention)
     k = intrinsics_for(spec.width, spec.height, spec.hfov_rad, convention, spec.lens)
     frame = spec.plugin.frame_name if spec.plugin and spec.plugin.frame_name else ""
     if not frame.endswith(OPTICAL_SUFFIXES):
-        frame = spec.link if optical else f"{spec.link}_optical_frame"
+        frame = spec.link if renders_as_link(spec) else f"{spec.link}_optical_frame"
     return Camera(width_px=spec.width, height_px=spec.height, fx_px=k.fx, fy_px=k.fy, cx_px=k.cx, cy_px=k.cy,
                   skew=k.skew, distortion=_distortion(spec, k.fx, k.fy), frame_id=frame)
 
@@ -103,7 +112,7 @@ def _extrinsics(pair: StereoPair, path: Path) -> Extrinsics:
 def load_description_profile(
     path: str | Path, *, convention: str = "gazebo-classic", left: str | None = None, right: str | None = None,
     xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (), name: str | None = None,
-    optical: bool | None = None,
+    allow_bad_baseline: bool = False,
 ) -> StereoProfile:
     """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors.
 
@@ -114,7 +123,12 @@ def load_description_profile(
         xacro_args: ``name:=value`` arguments of a xacro file.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
         name: profile name (default: the file name up to its first dot).
-        optical: True if the camera links are optical frames already; None decides by link name.
+        allow_bad_baseline: write a pair that ``s2r lint`` calls an error (baseline along the optical axis,
+            right camera on the left) with a warning instead of refusing it.
+
+    The optical axes come from the composed sensor poses (Gazebo renders along the camera frame's +x),
+    never from link names. The pair's geometry follows the same rule as ``s2r lint``
+    (:func:`s2r.geometry.baseline_layout_problem`): refused unless ``allow_bad_baseline``.
 
     Returns:
         Origin ``sim``; R, T in OpenCV's convention (metres); provenance with the convention and the source
@@ -123,22 +137,32 @@ def load_description_profile(
     source = Path(path)
     check_convention(convention)
     description = load_description(source, xacro_args=xacro_args, package_paths=package_paths)
-    pair = stereo_pair(description, left=left, right=right, optical=optical)
-    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args,
-                             optical=optical)
+    pair = stereo_pair(description, left=left, right=right)
+    _check_geometry(description, pair, allow=allow_bad_baseline)
+    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args)
+
+
+def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
+    """Refuse (or, when ``allow``, warn about) what lint reports about the pair's baseline; warn on offsets."""
+    from s2r.sources.lint_geometry import baseline_findings  # local: lint_geometry builds profiles itself
+
+    for severity, code, message, fix, line, needles in baseline_findings(description, pair):
+        if description.source_text != description.expanded_text:  # xacro: the first source line with a needle
+            lines = description.source_text.splitlines()
+            line = next((n for needle in needles for n, text in enumerate(lines, start=1) if needle in text), None)
+        where = f"line {line}" if line else "<joint>/<pose>"
+        if severity == "error" and not allow:
+            raise SourceError(f"[{code}] {message.split('; corrected:')[0]}", path=description.path, field=where,
+                              hint=f"{fix}; or pass --allow-bad-baseline to write it anyway (s2r lint says the same)")
+        logger.warning("%s: %s: %s [%s] %s", description.path, where, severity.upper(), code, message)
 
 
 def profile_from_pair(description: Description, pair: StereoPair, *, convention: str = "gazebo-classic",
-                      name: str | None = None, xacro_args: Mapping[str, str] | None = None,
-                      optical: bool | None = None) -> StereoProfile:
+                      name: str | None = None, xacro_args: Mapping[str, str] | None = None) -> StereoProfile:
     """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
     source = description.path
-
-    def is_optical(camera: CameraSpec) -> bool:
-        return camera.link_is_optical if optical is None else optical
-
-    left_cam = _camera(pair.left, convention, is_optical(pair.left))
-    right_cam = _camera(pair.right, convention, is_optical(pair.right))
+    left_cam = _camera(pair.left, convention)
+    right_cam = _camera(pair.right, convention)
     extrinsics = _extrinsics(pair, source)
     baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
     simulation = _simulation(pair.left)

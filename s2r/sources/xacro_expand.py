@@ -4,6 +4,10 @@ ROS resolves ``$(find pkg)`` through ament_index (ROS 2) or rospack (ROS 1), nei
 outside a ROS install; here a package is looked up in the ``--package-path`` folders given, then in the
 ``ROS_PACKAGE_PATH`` environment variable: a folder named ``pkg`` (or holding a ``package.xml`` whose
 ``<name>`` is ``pkg``) directly in, or up to three levels below, one of those folders.
+
+Expansion runs inside :func:`s2r.sources.xacro_sandbox.sandbox`: expressions are checked before xacro
+evaluates them, files are read only from the description's package and the package folders, and the
+environment is never read (see that module for what is allowed).
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from s2r.errors import SourceError
+from s2r.sources.xacro_sandbox import UnsafeXacro, sandbox
 
 __all__ = ["PACKAGE_PATH_ENV", "expand_xacro", "find_package", "is_xacro", "package_search_roots"]
 
@@ -97,10 +102,13 @@ def _find_resolver(package_paths: Sequence[Path]) -> Iterator[None]:
 
 
 def _root_cause(exc: BaseException) -> BaseException:
+    """The innermost exception under xacro's wrappers; an :class:`UnsafeXacro` refusal wins when present."""
     seen: set[int] = set()
     current: Any = exc
     while id(current) not in seen:
         seen.add(id(current))
+        if isinstance(current, (UnsafeXacro, PackageNotFound)):
+            return current  # type: ignore[no-any-return]
         inner = getattr(current, "exc", None) or current.__cause__ or current.__context__
         if not isinstance(inner, BaseException):
             return current  # type: ignore[no-any-return]
@@ -125,14 +133,46 @@ def expand_xacro(
 
     mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
     try:
-        with _find_resolver(package_paths):
+        with _find_resolver(package_paths), sandbox(Path(path), package_paths), _quiet_xacro():
             doc = xacro.process_file(str(Path(path).resolve()), mappings=mappings)
     except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
         cause = _root_cause(exc)
         if isinstance(cause, PackageNotFound):
             raise SourceError(f"package {cause.package!r} not found in any package folder", path=path,
                               field=f"$(find {cause.package})", hint=_FIND_HINT) from None
-        detail = " ".join(str(exc).split()) or type(exc).__name__
-        raise SourceError(f"xacro expansion failed: {detail}", path=path, field="xacro",
+        if isinstance(cause, UnsafeXacro):
+            raise SourceError(f"refused: {cause}", path=path, field="xacro",
+                              hint="README 'Hostile input' lists what a xacro may do") from None
+        raise SourceError(f"xacro expansion failed: {_safe_detail(exc, cause)}", path=path, field="xacro",
                           hint="fix the xacro file or pass the missing name:=value arguments") from None
     return str(doc.toprettyxml(indent="  "))
+
+
+def _safe_detail(exc: BaseException, cause: BaseException) -> str:
+    """A short description of a xacro failure that never quotes a loaded file's content.
+
+    YAML errors carry a snippet of the offending line, so only their problem and line are kept; every other
+    message is cut to its first line and 200 characters.
+    """
+    import yaml
+
+    if isinstance(cause, yaml.YAMLError):
+        mark = getattr(cause, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        return f"malformed YAML in a loaded file{where}: {getattr(cause, 'problem', None) or 'not valid YAML'}"
+    lines = [line for line in str(exc).splitlines() if line.strip()]
+    text = " ".join(lines[0].split()) if lines else ""
+    if not text or text.startswith("<class"):
+        text = f"{type(cause).__name__}: {' '.join(str(cause).split())}"
+    return text[:200] or type(cause).__name__
+
+
+@contextmanager
+def _quiet_xacro() -> Iterator[None]:
+    """Keep xacro's own stderr messages (warnings, ``xacro.message``) out of s2r's output: s2r reports the
+    failure once, as its own one-line error."""
+    import contextlib
+    import io
+
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        yield

@@ -9,9 +9,9 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
-from xml.parsers import expat
 
 from s2r.errors import SourceError
+from s2r.fileio import run_xml_parser, safe_xml_parser
 
 __all__ = ["XmlDoc", "parse_xml"]
 
@@ -37,7 +37,7 @@ def parse_xml(text: str, path: Path) -> XmlDoc:
     """
     builder = ET.TreeBuilder()
     lines: dict[int, int] = {}
-    parser = expat.ParserCreate()
+    parser = safe_xml_parser()  # refuses <!DOCTYPE>: no entity expansion from a stranger's file
 
     def start(tag: str, attrs: dict[str, str]) -> None:
         element = builder.start(tag, attrs)
@@ -46,12 +46,6 @@ def parse_xml(text: str, path: Path) -> XmlDoc:
     parser.StartElementHandler = start
     parser.EndElementHandler = builder.end
     parser.CharacterDataHandler = builder.data
-    try:
-        parser.Parse(text, True)
-    except expat.ExpatError as exc:
-        raise SourceError(
-            f"malformed XML: {expat.ErrorString(exc.code)} at column {exc.offset + 1}",
-            path=path, field=f"line {exc.lineno}", hint="fix the XML syntax there (unclosed or mismatched tag?)",
-        ) from None
+    run_xml_parser(parser, text, path=path, error=SourceError)
     root = builder.close()
     return XmlDoc(root=root, path=path, lines=lines)

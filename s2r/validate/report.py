@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import html
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, write_
 from s2r.validate.depth_accuracy import DepthAccuracy
 from s2r.validate.run import ValidationResult
 
-__all__ = ["REPORT_NAME", "build_sections", "write_validation_report"]
+__all__ = ["EXTRA_SECTIONS", "REPORT_NAME", "build_sections", "write_validation_report"]
 
 REPORT_NAME = "validation.html"
 
@@ -23,24 +24,73 @@ def _cls(passed: bool) -> str:
     return "pass" if passed else "fail"
 
 
+def _pct(value: float | None, digits: int = 2) -> str:
+    """A percentage figure (already in percent) as text; ``n/a`` when missing."""
+    return "n/a" if value is None else f"{value:.{digits}f} %"
+
+
+def _fraction_pct(value: float | None) -> str:
+    """A fraction (0..1) shown as a percentage."""
+    return "n/a" if value is None else f"{100 * value:.1f} %"
+
+
+def _banner(result: ValidationResult) -> tuple[str, str]:
+    names = " vs ".join(f"{html.escape(p.name)} ({role})" for role, p in result.roles.items())
+    causes = result.root_causes
+    if result.passed:
+        head = ("PASS: the sim is a faithful twin of the real camera" if result.pair
+                else "PASS: the profile passes its self-check")
+        return "pass", f"{head}<small>{names}: all {len(result.checks)} checks within tolerance</small>"
+    only_bench = all(c.key == "bench" for c in causes)
+    if only_bench:
+        return "warn", (f"CHECK THE TEST BENCH: the sim-vs-real figures pass, the renderer/calibrator self-test "
+                        f"does not<small>{names}</small>")
+    titles = ", ".join(html.escape(c.title.lower()) for c in causes if c.key != "bench")
+    what = "the sim differs from the real camera in" if result.pair else "the profile fails on"
+    return "fail", (f"FAIL: {what} {titles}<small>{names}: {len(result.failures)} of {len(result.checks)} checks "
+                    f"beyond tolerance, explained by {len(causes)} root cause(s) below</small>")
+
+
+def _causes_table(result: ValidationResult) -> str:
+    """Root causes as an HTML table: cause, what differs, the failing checks it explains, the one edit."""
+    body = []
+    for i, cause in enumerate(result.root_causes, 1):
+        effects = "".join(f"<li>{html.escape(c.text)}</li>" for c in cause.consequences)
+        body.append(f"<tr class='fail'><td class='text'><b>{i}. {html.escape(cause.title)}</b></td>"
+                    f"<td class='text'>{html.escape(cause.what)}</td>"
+                    f"<td class='text small'>{f'<ul>{effects}</ul>' if effects else '-'}</td>"
+                    f"<td class='text'>{html.escape(cause.fix)}</td></tr>")
+    head = "".join(f"<th class='text'>{h}</th>" for h in ("root cause", "what differs (sim vs real)",
+                                                           "also fails because of it", "the one edit that fixes it"))
+    return ("<table class='causes'><caption>Root causes: every failing check is listed once, under the parameter "
+            f"that explains it</caption><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
+
+
 def _verdict(result: ValidationResult) -> ReportSection:
-    names = ", ".join(f"{role}: {p.name}" for role, p in result.roles.items())
-    head = "PASS: every figure within tolerance" if result.passed else f"FAIL: {len(result.failures)} check(s)"
-    section = ReportSection("Verdict", paragraphs=[f"<b>{html.escape(head)}</b> ({html.escape(names)})"])
-    if result.failures:
-        items = "".join(f"<li>{html.escape(c.text)}</li>" for c in result.failures)
-        section.paragraphs.append(f"<ul>{items}</ul>")
-    timing = ", ".join(f"{k} {v:.1f} s" for k, v in result.seconds.items())
-    section.paragraphs.append(f"<span class='note'>Stage times: {html.escape(timing)}; settings "
-                              f"{html.escape(str(result.settings.as_dict()))}</span>")
+    section = ReportSection("Verdict", banner=_banner(result))
+    if result.root_causes:
+        section.tables.append(_causes_table(result))
     return section
+
+
+def _settings(result: ValidationResult) -> ReportSection:
+    s = result.settings
+    scenes = "; ".join(f"{name} at {', '.join(f'{d:g}' for d in ds)} m" for name, ds in s.scenes)
+    rows = [["board views (recovered calibration)", f"{s.views} at {s.supersample}x supersampling"],
+            ["depth scenes", f"{scenes} ({s.scene_supersample}x supersampling)"],
+            ["matcher preset", s.preset], ["random seed", str(s.seed)],
+            *[[f"time: {k}", f"{v:.1f} s"] for k, v in result.seconds.items()]]
+    return ReportSection("Run settings and stage times", collapsed=True,
+                         tables=[html_table(["setting", "value"], rows, left=(0, 1), caption="How this run was made")])
 
 
 def _parameters(result: ValidationResult) -> ReportSection:
     rows = [[r.name, r.unit, r.sim, r.real, r.diff, r.limit, r.real_std, "yes" if r.exceeds_sigma else "",
              "FAIL" if r.exceeds_tolerance else "ok"] for r in result.params]
-    table = html_table(["parameter", "unit", "sim", "real", "sim - real", "limit", "real std", "> 3 sigma", ""],
-                       rows, row_classes=[_cls(not r.exceeds_tolerance) for r in result.params])
+    table = html_table(["parameter", "unit", "sim", "real", "sim - real", "limit |sim - real|", "real std",
+                        "> 3 sigma", "verdict"], rows,
+                       row_classes=[_cls(not r.exceeds_tolerance) for r in result.params],
+                       caption="Sim and real parameters side by side (OpenCV 0-based pixels; each row in its unit)")
     return ReportSection("Parameters", tables=[table], paragraphs=[html.escape(n) for n in result.notes])
 
 
@@ -56,48 +106,68 @@ def _heat_map(diff: Any) -> str:
 
 
 def _projection(result: ValidationResult) -> ReportSection:
-    rows = [[d.camera, d.mean_px, d.p95_px, d.max_px, f"{d.outside_fraction:.0%}"] for d in result.projection]
-    table = html_table(["camera", "mean (px)", "p95 (px)", "max (px)", "outside sim image"], rows)
+    rows = [[d.camera, d.mean_px, d.p95_px, d.max_px, _fraction_pct(d.outside_fraction)] for d in result.projection]
+    limit = result.tolerances.projection_p95_px
+    table = html_table(["camera", "mean shift (px)", "p95 shift (px)", "max shift (px)", "outside sim image (%)"],
+                       rows, row_classes=[_cls(d.p95_px <= limit) for d in result.projection],
+                       caption=f"Pixel shift between where sim and real see the same point (p95 limit {limit:g} px)")
     size = result.projection[0].image_size
-    text = (f"Grid over the real left image ({size[0]}x{size[1]}); each pixel unprojected with the real camera at "
+    text = (f"Grid over the real left image ({size[0]}x{size[1]} px); each pixel unprojected with the real camera at "
             f"{result.tolerances.working_distance_m:g} m and projected with the sim camera (scaled to the real "
             "resolution when sizes differ), as mrcal's projection difference.")
     return ReportSection("Projection difference", paragraphs=[text], tables=[table],
-                         images=[(f"{d.camera} camera shift", _heat_map(d)) for d in result.projection])
+                         images=[(f"{d.camera} camera: pixel shift (px) over the real image", _heat_map(d))
+                                 for d in result.projection])
+
+
+def _legend_outside(ax: Any) -> None:
+    """The legend beside the axes, so it never covers a curve or a point."""
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
 
 
 def _resolution(result: ValidationResult) -> ReportSection:
     first = next(iter(result.resolution.values()))
-    headers = ["profile", *[f"{z:g} m (mm)" for z in first.distances_m], "2% distance (m)", "matcher range (m)"]
+    headers = ["profile", *[f"RMS at {z:g} m (mm)" for z in first.distances_m], "2 % distance (m)",
+               "matcher range (m)"]
     rows = [[f"{role}: {r.profile}", *[1000 * v for v in r.rms_m], r.limit_2pct_m, f"{r.near_m:.2f}-{r.far_m:.1f}"]
             for role, r in result.resolution.items()]
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    fig, ax = plt.subplots(figsize=(7.4, 3.6))
     z = np.linspace(0.3, 6.0, 100)
     for role, profile in result.roles.items():
         ax.plot(z, 100 * profile.depth_rms_m(z) / z, label=f"{role}: {profile.name}")
     ax.axhline(2.0, color="grey", linestyle=":", label="2 %")
     ax.set_xlabel("depth (m)")
     ax.set_ylabel("theoretical RMS (% of depth)")
-    ax.legend()
-    return ReportSection("Depth resolution (Intel's model, s = 0.08 px)", tables=[html_table(headers, rows)],
-                         images=[("theoretical relative depth RMS", figure_to_data_uri(fig))])
+    _legend_outside(ax)
+    table = html_table(headers, rows, caption="Theoretical depth RMS, Z^2 s / (fx B) with s = 0.08 px")
+    return ReportSection("Depth resolution (Intel's model, s = 0.08 px)", tables=[table],
+                         images=[("theoretical relative depth RMS (% of depth) against depth (m)",
+                                  figure_to_data_uri(fig))])
 
 
 def _recovery(result: ValidationResult) -> ReportSection:
-    section = ReportSection("Recovered calibration (PyBullet boards -> s2r calibrate)")
+    """The renderer/calibrator self-test: collapsible, after the answer (it says nothing about sim vs real)."""
+    ok = all(rec.passed for rec in result.recovery.values())
+    secs = sum(sum(rec.seconds.values()) for rec in result.recovery.values())
+    section = ReportSection(
+        f"The test bench itself: recovered calibration ({'passes' if ok else 'FAILS'})", collapsed=True,
+        paragraphs=["PyBullet renders chessboards through each profile and s2r's own calibration must recover the "
+                    "profile it rendered. This checks the renderer and the calibrator, not the sim against the "
+                    "real camera: a failure here makes every figure above less certain, but needs no edit to the "
+                    "sim." + (f" Its stages took {secs:.1f} s in all (profiles run in parallel)." if secs else "")])
     for role, rec in result.recovery.items():
-        section.paragraphs.append(f"<b>{html.escape(role)}: {html.escape(rec.profile)}</b>: {rec.views_used} of "
-                                  f"{rec.views_rendered} views, stereo RMS {rec.rms_px or float('nan'):.3f} px")
         rows = [[r.name, r.unit, r.declared, r.recovered, r.error, r.std, r.n_sigma, r.floor,
                  "ok" if r.passed else "FAIL"] for r in rec.rows]
+        caption = (f"{role} profile {rec.profile}: {rec.views_used} of {rec.views_rendered} views used, stereo RMS "
+                   f"{rec.rms_px or float('nan'):.3f} px")
         section.tables.append(html_table(["parameter", "unit", "declared", "recovered", "error", "predicted std",
-                                          "|error| / std", "floor", ""], rows,
-                                         row_classes=[_cls(r.passed) for r in rec.rows]))
+                                          "|error| / std", "floor", "verdict"], rows,
+                                         row_classes=[_cls(r.passed) for r in rec.rows], caption=caption))
     return section
 
 
 def _depth_figure(result: ValidationResult) -> str:
-    fig, ax = plt.subplots(figsize=(6.8, 4.0))
+    fig, ax = plt.subplots(figsize=(7.8, 4.0))
     z = np.linspace(0.4, 5.2, 100)
     for i, (role, acc) in enumerate(result.depth.items()):
         colour = f"C{i}"
@@ -108,36 +178,36 @@ def _depth_figure(result: ValidationResult) -> str:
                 label=f"{role} p90 |error|")
         profile = result.roles[role]
         ax.plot(z, 100 * profile.depth_rms_m(z) / z, ":", color=colour, label=f"{role} theory RMS")
-    ax.set_xlabel("depth (m)")
-    ax.set_ylabel("relative depth error (%)")
-    ax.legend(fontsize=8)
+    ax.set_xlabel("true depth (m)")
+    ax.set_ylabel("relative depth error (% of depth)")
+    _legend_outside(ax)
     return figure_to_data_uri(fig)
 
 
 def _depth(result: ValidationResult) -> ReportSection:
     roles = list(result.depth)
-    headers = ["bin"]
+    headers = ["true depth bin (m)"]
     for role in roles:
-        headers += [f"{role} median %", f"{role} p90 %", f"{role} bias %", f"{role} fill", f"{role} theory %"]
+        headers += [f"{role} median |error| (%)", f"{role} p90 |error| (%)", f"{role} bias (%)",
+                    f"{role} fill rate (%)", f"{role} theory RMS (%)"]
     rows = []
     for i, b in enumerate(next(iter(result.depth.values())).bins):
-        row: list[Any] = [f"{b.lo_m:g}-{b.hi_m:g} m"]
+        row: list[Any] = [f"{b.lo_m:g}-{b.hi_m:g}"]
         for role in roles:
             s = result.depth[role].bins[i]
-            row += [s.median_pct, s.p90_pct, s.bias_pct, s.fill_rate, f"{s.theory_lo_pct:.2f}-{s.theory_hi_pct:.2f}"]
+            row += [s.median_pct, s.p90_pct, s.bias_pct, None if s.fill_rate is None else 100 * s.fill_rate,
+                    f"{s.theory_lo_pct or 0:.2f}-{s.theory_hi_pct or 0:.2f}"]
         rows.append(row)
-    within = "; ".join(f"{role}: median |error| within 3 m {_pct(acc.within_3m.median_pct)}, fill "
-                       f"{_pct(100 * (acc.within_3m.fill_rate or 0))}" for role, acc in result.depth.items())
+    within = "; ".join(f"{role}: median |error| within 3 m {_pct(acc.within_3m.median_pct)}, fill rate "
+                       f"{_fraction_pct(acc.within_3m.fill_rate)}" for role, acc in result.depth.items())
     acc0 = next(iter(result.depth.values()))
     text = (f"Preset {html.escape(acc0.preset)}, scenes {', '.join(acc0.scenes)}, planes at "
             f"{', '.join(f'{d:g}' for d in acc0.distances_m)} m. {html.escape(within)}.")
+    table = html_table(headers, rows, caption="Depth error by true depth, as a percentage of the true depth")
     return ReportSection("Depth accuracy (rendered ground truth, rectified left image)", paragraphs=[text],
-                         tables=[html_table(headers, rows)],
-                         images=[("depth error by distance beside the theoretical curve", _depth_figure(result))])
-
-
-def _pct(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2f} %"
+                         tables=[table],
+                         images=[("relative depth error (%) by true depth (m), beside the theoretical RMS",
+                                  _depth_figure(result))])
 
 
 def _show(ax: Any, image: Any, title: str, **kwargs: Any) -> Any:
@@ -147,29 +217,36 @@ def _show(ax: Any, image: Any, title: str, **kwargs: Any) -> Any:
     return shown
 
 
+def _colour_bar(fig: Any, ax: Any, shown: Any, label: str) -> None:
+    """A horizontal colour bar in an inset under ``ax``: it takes no width from the panel."""
+    cax = ax.inset_axes((0.0, -0.14, 1.0, 0.05))
+    fig.colorbar(shown, cax=cax, orientation="horizontal", label=label)
+
+
 def _samples_figure(role: str, acc: DepthAccuracy) -> str:
     s = acc.samples
     assert s is not None
-    fig, axes = plt.subplots(1, 5, figsize=(17, 3.0))
+    fig, axes = plt.subplots(1, 5, figsize=(17, 3.6))
     finite = s.truth_m[np.isfinite(s.truth_m)]
     lo, hi = (float(np.min(finite)), float(np.max(finite))) if finite.size else (0.0, 5.0)
     span = dict(cmap="turbo", vmin=lo - 0.05 * (hi - lo + 0.1), vmax=hi + 0.05 * (hi - lo + 0.1))
     _show(axes[0], s.left, "rendered left", cmap="gray")
     _show(axes[1], s.rect_left, "rectified left", cmap="gray")
-    _show(axes[2], s.depth_m, "pipeline depth", **span)
-    depth_im = _show(axes[3], s.truth_m, "true depth", **span)
+    _colour_bar(fig, axes[2], _show(axes[2], s.depth_m, "pipeline depth", **span), "depth (m)")
+    _colour_bar(fig, axes[3], _show(axes[3], s.truth_m, "true depth", **span), "depth (m)")
     with np.errstate(invalid="ignore", divide="ignore"):
         rel = 100.0 * (s.depth_m - s.truth_m) / s.truth_m
-    err_im = _show(axes[4], rel, "relative error (%)", cmap="coolwarm", vmin=-2.0, vmax=2.0)
-    fig.colorbar(depth_im, ax=axes[3], label="depth (m)", shrink=0.8)
-    fig.colorbar(err_im, ax=axes[4], label="%", shrink=0.8)
-    fig.suptitle(f"{role}: {acc.profile}, frame {s.name} (NaN = white/transparent)")
+    shown = _show(axes[4], rel, "relative error", cmap="coolwarm", vmin=-2.0, vmax=2.0)
+    _colour_bar(fig, axes[4], shown, "error (% of depth)")
+    for ax in axes[:2]:
+        ax.set_box_aspect(s.truth_m.shape[0] / s.truth_m.shape[1])
+    fig.suptitle(f"{role}: {acc.profile}, frame {s.name} (NaN = white)")
     return figure_to_data_uri(fig)
 
 
 def _samples(result: ValidationResult) -> ReportSection:
-    images = [(f"{role}: rendered, rectified, depth and ground truth", _samples_figure(role, acc))
-              for role, acc in result.depth.items() if acc.samples is not None]
+    images = [(f"{role} profile: rendered, rectified, pipeline depth, true depth and relative error (same scale)",
+               _samples_figure(role, acc)) for role, acc in result.depth.items() if acc.samples is not None]
     return ReportSection("Sample images", images=images)
 
 
@@ -177,10 +254,10 @@ def _edits(result: ValidationResult) -> ReportSection:
     if not result.edits:
         return ReportSection("What to change", paragraphs=["Nothing: the sim parameters match within tolerance."])
     rows = [[e.parameter, e.current, e.target, e.where] for e in result.edits]
-    table = html_table(["parameter", "now", "set to", "where"], rows)
+    table = html_table(["parameter", "now (sim)", "set to (real)", "where"], rows, left=(0, 1, 2, 3),
+                       caption="Edits to the robot description, one per parameter beyond tolerance")
     return ReportSection("What to change in the sim", tables=[table],
-                         paragraphs=["Edits to the robot description that remove each parameter difference beyond "
-                                     "tolerance; the sensor XML at the end of this page has them all."])
+                         paragraphs=["The sensor XML at the end of this page has them all."])
 
 
 def _xml(result: ValidationResult) -> ReportSection:
@@ -188,18 +265,25 @@ def _xml(result: ValidationResult) -> ReportSection:
                          paragraphs=[f"<pre>{html.escape(result.gazebo_xml or '')}</pre>"])
 
 
+#: Builders of further sections, shown after the answer and before the test bench (each returns None to skip).
+#: Other validate stages (such as recordings) append theirs here.
+EXTRA_SECTIONS: list[Callable[[ValidationResult], ReportSection | None]] = []
+
+
 def build_sections(result: ValidationResult) -> list[ReportSection]:
-    """The report's sections in reading order (pair-only sections left out of a self-check)."""
+    """The report's sections in reading order: the answer first, then the details, then the test bench."""
     sections = [_verdict(result)]
     if result.pair:
         sections += [_edits(result), _parameters(result), _projection(result)]
     sections.append(_resolution(result))
-    if result.recovery:
-        sections.append(_recovery(result))
     if result.depth:
         sections += [_depth(result), _samples(result)]
+    sections += [s for s in (build(result) for build in EXTRA_SECTIONS) if s is not None]
     if result.gazebo_xml:
         sections.append(_xml(result))
+    if result.recovery:
+        sections.append(_recovery(result))
+    sections.append(_settings(result))
     return sections
 
 

@@ -17,6 +17,7 @@ from typing import Any
 from s2r.errors import ValidateError
 from s2r.profile import StereoProfile
 from s2r.validate.advice import Edit, suggest_edits
+from s2r.validate.causes import RootCause, group_failures
 from s2r.validate.depth_accuracy import DepthAccuracy
 from s2r.validate.params import ParamRow, parameter_table
 from s2r.validate.projection import ProjectionDiff, projection_difference
@@ -75,12 +76,19 @@ class ValidationResult:
         """The failing checks, in report order."""
         return [c for c in self.checks if not c.passed]
 
+    @property
+    def root_causes(self) -> list[RootCause]:
+        """The failures grouped by the sim parameter that explains them (see :mod:`s2r.validate.causes`)."""
+        return group_failures(self.checks, self.params, self.edits, sim=self.roles.get("sim"),
+                              real=self.roles.get("real"), preset=self.settings.preset)
+
     def as_dict(self) -> dict[str, Any]:
         """Every figure as plain JSON-ready data."""
         return {
             "mode": "sim-vs-real" if self.pair else "self-check",
             "profiles": {role: p.name for role, p in self.roles.items()},
-            "passed": self.passed, "settings": self.settings.as_dict(), "tolerances": self.tolerances.as_dict(),
+            "passed": self.passed, "root_causes": [c.as_dict() for c in self.root_causes],
+            "settings": self.settings.as_dict(), "tolerances": self.tolerances.as_dict(),
             "parameters": [r.as_dict() for r in self.params],
             "projection": [d.as_dict() for d in self.projection],
             "resolution": {k: v.as_dict() for k, v in self.resolution.items()},

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import textwrap
+
+from s2r.validate.causes import RootCause
 from s2r.validate.params import ParamRow
 from s2r.validate.run import ValidationResult
 
 __all__ = ["summary_lines"]
 
-_MAX_FAILURES = 8
+_WIDTH = 110
 
 
 def _value(value: float | str | None, digits: int = 5) -> str:
@@ -68,18 +71,26 @@ def _depth_lines(result: ValidationResult) -> list[str]:
     return lines
 
 
+def _cause_lines(index: int, cause: RootCause) -> list[str]:
+    lines = [f"  {index}. {cause.title}: {cause.what}"]
+    effects = [c.name for c in cause.consequences]
+    if effects:
+        lines += textwrap.wrap(f"also fails: {', '.join(effects)}", width=_WIDTH, initial_indent=" " * 5,
+                               subsequent_indent=" " * 7)
+    lines += textwrap.wrap(f"fix: {cause.short_fix}", width=_WIDTH, initial_indent=" " * 5, subsequent_indent=" " * 7)
+    return lines
+
+
 def _verdict_lines(result: ValidationResult) -> list[str]:
+    """PASS, or FAIL with the failures grouped by root cause, each with its consequences and its one edit."""
     if result.passed:
         return [f"PASS: all {len(result.checks)} checks within tolerance"]
-    failures = result.failures
-    lines = [f"FAIL: {len(failures)} of {len(result.checks)} checks beyond tolerance:"]
-    params = [c.name for c in failures if c.section == "parameters"]
-    if params:
-        lines.append(f"  - parameters differ: {', '.join(params)}")
-    others = [c.text for c in failures if c.section != "parameters"]
-    lines += [f"  - {text}" for text in others[:_MAX_FAILURES]]
-    if len(others) > _MAX_FAILURES:
-        lines.append(f"  ... and {len(others) - _MAX_FAILURES} more (--json lists every check)")
+    causes = result.root_causes
+    what = "the sim differs from the real camera" if result.pair else "the profile fails its self-check"
+    lines = [f"FAIL: {what}: {len(causes)} root cause(s) behind {len(result.failures)} failing checks (of "
+             f"{len(result.checks)}); each with the checks it explains and the one edit that fixes it:"]
+    for i, cause in enumerate(causes, 1):
+        lines += _cause_lines(i, cause)
     return lines
 
 
@@ -99,12 +110,9 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
     if result.depth:
         lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
-    if result.edits:
-        lines.append("To make the sim match the real camera:")
-        for e in result.edits:
-            if e.parameter == "sensor XML":
-                lines.append(f"  write them: {e.where}")
-            else:
-                lines.append(f"  {e.parameter}: {e.current} -> {e.target}  [{e.where}]")
+    lines += _verdict_lines(result)
+    xml = [e for e in result.edits if e.parameter == "sensor XML"]
+    if xml:
+        lines.append(f"  where to write each edit: --report, --json; every edit at once: {xml[0].where}")
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
-    return [*lines, *_verdict_lines(result), f"({timing})"]
+    return [*lines, f"({timing})"]

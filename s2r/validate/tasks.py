@@ -7,6 +7,7 @@ back through a manager queue and is folded into one overall percentage.
 
 from __future__ import annotations
 
+import logging
 import queue as queue_mod
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from multiprocessing import Manager
@@ -79,9 +80,16 @@ def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances
     if kind == "recovery":
         return recover_calibration(profile, tol, views=settings.views, supersample=settings.supersample,
                                    seed=settings.seed, jobs=1, progress=progress)
-    return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes, bins=settings.bins_m,
-                                  supersample=settings.scene_supersample, seed=settings.seed, jobs=1,
-                                  progress=progress)
+    # validate() already warned about this preset's range (check_distances): do not print it a second time
+    presets_log = logging.getLogger("s2r.depth.presets")
+    level = presets_log.level
+    presets_log.setLevel(logging.ERROR)
+    try:
+        return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes,
+                                      bins=settings.bins_m, supersample=settings.scene_supersample,
+                                      seed=settings.seed, jobs=1, progress=progress)
+    finally:
+        presets_log.setLevel(level)
 
 
 def _drain(channel: Any, overall: _Overall) -> None:

@@ -38,14 +38,15 @@ def test_known_rig_via_cli_with_report_and_cache(synthetic_set: tuple[Path, Ster
     assert (tmp_path / "rig.yaml.corners").is_dir()
 
 
-def test_refine_joint_recovers_the_rig_tightly(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_fix_intrinsics_ros_way_recovers_the_rig(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """--fix-intrinsics (ROS's way: the joint solve is the default now, the old --refine-joint)."""
     folder, truth = synthetic_set
-    out = tmp_path / "joint.yaml"
-    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--refine-joint", "--no-cache"]) == 0
+    out = tmp_path / "fixed.yaml"
+    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--fix-intrinsics", "--no-cache"]) == 0
     capsys.readouterr()
     p = load_profile_file(out)
-    assert "joint refinement" in p.provenance.method
+    assert "CALIB_FIX_INTRINSIC" in p.provenance.method
     for cam, true in ((p.left, truth.left), (p.right, truth.right)):
         assert abs(cam.fx_px - true.fx_px) < 0.0015 * true.fx_px
         assert abs(cam.cx_px - true.cx_px) < 0.7 and abs(cam.cy_px - true.cy_px) < 0.7

@@ -29,7 +29,8 @@ def test_single_pair(setup: tuple[Path, Path, Path], tmp_path: Path, pair: Synth
     out = tmp_path / "out"
     assert main(["depth", "--profile", str(profile), str(left), str(right), "-o", str(out), "--preset", "fast",
                  "--ply"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["depth.png", "depth_color.png", "disparity.npy", "points.ply"]
+    assert sorted(p.name for p in out.iterdir()) == ["camera_info.yaml", "depth.png", "depth_color.png",
+                                                     "disparity.npy", "points.ply"]
     assert "small_rig / fast" in capsys.readouterr().out
     disp = np.load(out / "disparity.npy")
     x0, x1, y0, y1 = pair.box
@@ -55,7 +56,8 @@ def test_sequence(tmp_path: Path, small_rig: StereoProfile) -> None:
     assert main(["depth", "--profile", str(profile), "--left-dir", str(tmp_path / "L"), "--right-dir",
                  str(tmp_path / "R"), "-o", str(out), "--preset", "bm"]) == 0
     names = sorted(p.name for p in out.iterdir())
-    assert len(names) == 15 and names[:3] == ["00_depth.png", "00_depth_color.png", "00_disparity.npy"]
+    assert len(names) == 16 and "camera_info.yaml" in names
+    assert names[:3] == ["00_depth.png", "00_depth_color.png", "00_disparity.npy"]
     for i in range(5):
         disp = np.load(out / f"{i:02d}_disparity.npy")
         assert np.nanmedian(disp[70:170, 170:230]) == pytest.approx(20 + i, abs=0.1)

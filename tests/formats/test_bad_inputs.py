@@ -172,7 +172,7 @@ CASES: dict[str, Callable[[Path], Case]] = {
     "ROS unknown distortion model": _ros_case(_set(["distortion_model"], "fisheye62"),
                                               ["distortion_coefficients", "unsupported distortion model"]),
     "Kalibr missing field": _one(lambda t: _kalibr(t, _delete(["cam1", "T_cn_cnm1"])),
-                                 ["cam1.T_cn_cnm1", "required field"]),
+                                 ["cam1.T_cn_cnm1", "no extrinsics between cam0 and cam1"]),
     "Kalibr unknown camera model": _one(lambda t: _kalibr(t, _set(["cam0", "camera_model"], "omni")),
                                         ["cam0.camera_model", "'omni' is not supported"]),
     "ROS negative focal length": _ros_case(_set(["camera_matrix", "data", 0], -554.0),

@@ -29,10 +29,10 @@ def test_boards_command_writes_a_set(profile_path: Path, tmp_path: Path, capsys:
     assert sorted(p.name for p in (out / "right").iterdir()) == ["00.png", "01.png"]
 
 
-def test_scene_command_writes_ground_truth(profile_path: Path, tmp_path: Path,
+def test_scene_command_writes_ground_truth(profile_path: Path, tmp_path: Path,  # -o, as every command; --out too
                                            capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "scene"
-    code = main(["render", "scene", str(profile_path), "--scene", "planes", "--distances", "1,2", "--out", str(out),
+    code = main(["render", "scene", str(profile_path), "--scene", "planes", "--distances", "1,2", "-o", str(out),
                  "--supersample", "1", "--jobs", "1"])
     assert code == 0
     assert "2 planes frame(s)" in capsys.readouterr().out

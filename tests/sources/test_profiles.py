@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from s2r.cli import main as cli_main
-from s2r.geometry import R_LINK_OPTICAL
-from s2r.sources import load_description, load_description_profile
+from s2r.errors import SourceError
+from s2r.sources import lint_description, load_description, load_description_profile
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.loader import optical_pose
 from tests.sources.rigs import FIXED_URDF, SEED_URDF, XBOT_SDF, joint, sensor, two_camera_urdf, urdf, write
@@ -44,10 +44,16 @@ def test_seed_matcher_and_working_range() -> None:
     assert p.provenance.sources[0].sha256 and p.name == "gazebo_dual_camera"
 
 
-def test_seed_rig_as_written_has_its_right_camera_behind() -> None:
-    # joint xyz (-0.1, 0, 0) in the left link: 10 cm behind along the viewing axis -> optical (0, 0, -0.1)
-    p = load_description_profile(SEED_URDF)
+def test_seed_rig_as_written_has_its_right_camera_behind(caplog: pytest.LogCaptureFixture) -> None:
+    # joint xyz (-0.1, 0, 0) in the left link: 10 cm behind along the viewing axis -> optical (0, 0, -0.1).
+    # One rule with lint: refused (naming lint's code and the corrected joint), written only when asked, loudly.
+    with pytest.raises(SourceError, match=r"\[baseline-axis\].*10.0 cm behind.*xyz=\"0 -0.1 0\"") as info:
+        load_description_profile(SEED_URDF)
+    assert f"{SEED_URDF}: line " in str(info.value)
+    with caplog.at_level(logging.WARNING, logger="s2r"):
+        p = load_description_profile(SEED_URDF, allow_bad_baseline=True)
     assert pytest.approx([0.0, 0.0, 0.1], abs=1e-12) == p.T
+    assert "ERROR [baseline-axis]" in caplog.text
 
 
 @pytest.mark.parametrize(("convention", "cx"), [("gazebo-classic", 320.5), ("gz-sim", 320.0), ("exact", 319.5)])
@@ -103,21 +109,20 @@ def test_movable_joint_on_the_path_warns(tmp_path: Path, caplog: pytest.LogCaptu
     assert "'left_to_right' (revolute)" in caplog.text and "position 0" in caplog.text
 
 
-def test_links_that_are_optical_frames_already(tmp_path: Path) -> None:
-    """Sensors on *_optical links: the link IS the optical frame (x right), so xyz (0.1, 0, 0) is sideways."""
+def test_optical_links_without_a_pose_rotation_render_along_the_link_x(tmp_path: Path) -> None:
+    """Sensors on *_optical links with no <pose> rotation: Gazebo renders along the link's +x (= the robot's -y
+    for the left link here), whatever the name says, so both cameras look along the line joining them."""
     rpy = f"{-math.pi / 2} 0 {-math.pi / 2}"
     text = urdf(["base", "left_optical", "right_optical"],
                 [joint("l", "base", "left_optical", "0 0.05 0", rpy), joint("r", "base", "right_optical", "0 -0.05 0",
                                                                              rpy)],
                 {"left_optical": sensor("left_cam"), "right_optical": sensor("right_cam")})
-    p = load_description_profile(write(tmp_path, "optical.urdf", text))
-    assert pytest.approx([-0.1, 0, 0], abs=1e-12) == p.T and np.allclose(p.R, np.eye(3), atol=1e-12)
-    assert p.left.frame_id == "left_optical"
-    # the same geometry with links not named optical needs the explicit option
-    renamed = text.replace("left_optical", "cam_l").replace("right_optical", "cam_r")
-    p2 = load_description_profile(write(tmp_path, "renamed.urdf", renamed), optical=True)
-    assert pytest.approx([-0.1, 0, 0], abs=1e-12) == p2.T
-    assert R_LINK_OPTICAL.T @ np.array([0, -0.1, 0]) == pytest.approx([0.1, 0, 0])
+    path = write(tmp_path, "optical.urdf", text)
+    with pytest.raises(SourceError, match=r"\[baseline-axis\] baseline along the optical axis: the right camera is "
+                       r"10.0 cm in front of"):
+        load_description_profile(path)
+    assert [f.code for f in lint_description(path) if f.severity == "error"] == ["baseline-axis"]
+    assert any(f.code == "optical-link" for f in lint_description(path))
 
 
 def test_sensor_and_camera_poses_are_applied(tmp_path: Path) -> None:
@@ -125,7 +130,7 @@ def test_sensor_and_camera_poses_are_applied(tmp_path: Path) -> None:
     text = urdf(["body"], [], {"body": sensor("left_cam", pose="0 0 0 0 0 0") + sensor("right_cam",
                                                                                        pose="0.2 -0.07 0 0 0 0")})
     # the 0.2 m forward offset puts the right camera ahead: T = -(0.07 right, 0, 0.2 forward) in optical
-    p = load_description_profile(write(tmp_path, "poses.urdf", text))
+    p = load_description_profile(write(tmp_path, "poses.urdf", text), allow_bad_baseline=True)
     assert pytest.approx([-0.07, 0, -0.2], abs=1e-12) == p.T
 
 

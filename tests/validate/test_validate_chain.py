@@ -52,9 +52,11 @@ def test_sim_vs_real_fails_naming_fov_resolution_and_baseline(pair_run: tuple[in
     verdict = text[text.index("FAIL:"):]
     for name in ("image size", "HFOV", "baseline"):
         assert name in verdict
-    # the edits, with the values a Gazebo description needs
-    assert "resolution: 640x480 -> 848x480" in text
-    assert "horizontal_fov: 1.0470 rad -> 1.5708 rad" in text
+    # grouped by root cause, each with the edit and the values a Gazebo description needs
+    assert "1. Resolution: image size: sim 640x480 vs real 848x480" in verdict
+    assert "2. Focal length / field of view: HFOV:" in verdict
+    assert "resolution 640x480 -> 848x480" in verdict
+    assert "horizontal_fov 1.0470 rad -> 1.5708 rad" in verdict
     assert 'xyz="0 -0.05 0"' in text and "export-gazebo realsense_d435_848x480" in text
     # the renderer + calibration chain recovers both profiles
     assert text.count("all within tolerance") == 2
@@ -68,7 +70,7 @@ def test_report_is_one_self_contained_page(pair_run: tuple[int, str, Path]) -> N
     images = re.findall(r"<img src='data:image/png;base64,", html)
     assert len(images) >= 6  # 2 heat maps, resolution, depth curves, 2 sample strips
     assert not re.search(r"(src|href)=['\"]https?:", html)
-    for title in ("Verdict", "What to change", "Parameters", "Projection difference", "Recovered calibration",
+    for title in ("Verdict", "What to change", "Parameters", "Projection difference", "The test bench itself",
                   "Depth accuracy", "Sample images", "Sensor XML"):
         assert title in html
 

@@ -1,0 +1,70 @@
+"""Benchmark the start-up of light `s2r` commands against Python importing numpy, yaml and pydantic.
+
+The anchor is ``python -c "import numpy, yaml, pydantic"``: the least any s2r command must pay, since every
+command loads a profile (numpy arrays, YAML, pydantic models). Each command runs as a fresh subprocess, the
+runs interleaved (anchor, command 1, command 2, ..., anchor, ...) so load from other processes hits all of
+them alike; the figure is the median of ``--runs`` runs (default 5) and the ratio to the anchor's median.
+The issue's bar: ``--help``, ``--version`` and ``profile show|list|convert`` within 2x the anchor.
+
+Usage: .venv/bin/python bench/bench_cli_startup.py [--runs 5]
+Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+#: The installed console script (what a user types), else the module.
+_SCRIPT = Path(sys.executable).with_name("s2r")
+S2R = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "s2r.cli"]
+ANCHOR = [sys.executable, "-c", "import numpy, yaml, pydantic"]
+
+
+def commands(tmp: Path) -> dict[str, list[str]]:
+    """Command label -> argv; convert writes into ``tmp`` (with --force, so every run does the same work)."""
+    return {
+        "python -c 'import numpy, yaml, pydantic'": ANCHOR,
+        "s2r --help": [*S2R, "--help"],
+        "s2r --version": [*S2R, "--version"],
+        "s2r profile list": [*S2R, "profile", "list"],
+        "s2r profile show realsense_d435_848x480": [*S2R, "profile", "show", "realsense_d435_848x480"],
+        "s2r profile convert ... --to ros": [*S2R, "profile", "convert", "realsense_d435_848x480", "--to", "ros",
+                                             "-o", str(tmp / "ros"), "--force"],
+    }
+
+
+def time_once(argv: list[str]) -> float:
+    """Wall-clock seconds of one run; raises when the command fails."""
+    start = time.perf_counter()
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=5, help="runs per command (median reported, default 5)")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        cmds = commands(Path(tmp))
+        for argv in cmds.values():  # warm the file cache and the .pyc files
+            time_once(argv)
+        times: dict[str, list[float]] = {label: [] for label in cmds}
+        for _ in range(args.runs):
+            for label, argv in cmds.items():
+                times[label].append(time_once(argv))
+    anchor = statistics.median(next(iter(times.values())))
+    print(f"{'command':<44}{'median (s)':>11}{'min (s)':>9}{'x anchor':>10}  (median of {args.runs} runs)")
+    for label, values in times.items():
+        med = statistics.median(values)
+        print(f"{label:<44}{med:>11.3f}{min(values):>9.3f}{med / anchor:>10.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,146 @@
+"""``s2r depth-quality PROFILE``: Intel's depth-quality metrics of a recording (stereo pairs or device depth).
+
+Exit codes: 0 figures computed, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_pattern, print_json
+from s2r.depth.names import PRESETS
+from s2r.errors import DepthError
+from s2r.fileio import check_output_free, prepare_output_dir
+from s2r.registry import load_profile
+
+if TYPE_CHECKING:
+    from s2r.profile import StereoProfile
+    from s2r.quality.run import DepthView, QualityResult
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``s2r depth-quality``."""
+    parser = sub.add_parser(
+        "depth-quality", help="Intel's depth-quality metrics of a recording (board or flat wall)",
+        description="Z accuracy, plane-fit RMS, sub-pixel RMS, fill rate (and temporal noise when a pose repeats) "
+        "inside a chessboard's region, against the board's PnP plane, per frame and per distance bin, as Intel's "
+        "camera depth testing methodology defines them. Depth from stereo pairs through the pipeline (--right) or "
+        "from the device (--depth: uint16 mm PNG, 0 = no data, or float32 metres .npy, registered to the left "
+        "image). --wall: a flat wall without a board (central ROI).")
+    parser.add_argument("profile", metavar="PROFILE", help="profile name or YAML path")
+    parser.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
+    parser.add_argument("--right", metavar="DIR|GLOB", help="right images: depth through the pipeline")
+    parser.add_argument("--depth", metavar="DIR|GLOB", help="device depth images registered to the left images")
+    parser.add_argument("--bag", type=Path, help="ROS bag (ROS 1 file or ROS 2 folder) instead of folders")
+    parser.add_argument("--left-topic", help="left image topic in --bag")
+    parser.add_argument("--right-topic", help="right image topic in --bag")
+    parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
+    parser.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
+    parser.add_argument("--preset", default="profile", choices=PRESETS, help="matcher preset for stereo pairs")
+    parser.add_argument("--num-disparities", type=int, help="disparity range in px for stereo (multiple of 16)")
+    parser.add_argument("--pattern", type=argparse_type(parse_pattern), help="chessboard INNER corners, e.g. 9x6")
+    parser.add_argument("--square", type=float, help="chessboard square size in metres")
+    parser.add_argument("--wall", action="store_true", help="flat-wall mode: no board, central ROI")
+    parser.add_argument("--distance", type=float, help="flat-wall distance in metres (gives Z accuracy)")
+    parser.add_argument("--roi", type=float, default=0.8, help="flat-wall ROI: share of width and height (0.8)")
+    parser.add_argument("--depth-scale", type=float, default=0.001, help="metres per count of 16-bit depth")
+    parser.add_argument("--report", metavar="DIR", help="write DIR/depth_quality.html")
+    add_json(parser)
+    add_force(parser)
+    parser.set_defaults(func=_cmd_depth_quality)
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    stereo = args.right is not None or args.right_topic is not None
+    device = args.depth is not None or args.depth_topic is not None
+    if stereo == device:
+        raise DepthError("give exactly one depth source", field="--right/--depth",
+                         hint="--right DIR (stereo through the pipeline) or --depth DIR (device depth)")
+    if args.bag is None and (args.left_topic or args.right_topic or args.depth_topic):
+        raise DepthError("topics need --bag", field="--left-topic", hint="pass --bag BAG")
+    if args.bag is not None and not args.left_topic:
+        raise DepthError("a bag needs --left-topic", field="--left-topic", hint="e.g. /camera/infra1/image_rect_raw")
+    if args.bag is None and args.left is None and not (args.wall and device):
+        raise DepthError("missing left images", field="--left", hint="pass --left DIR|GLOB")
+    if not args.wall and (args.pattern is None or args.square is None):
+        raise DepthError("board mode needs the board", field="--pattern/--square",
+                         hint="pass --pattern COLSxROWS (inner corners) and --square METRES, or --wall")
+    if args.square is not None and not args.square > 0:
+        raise DepthError(f"must be positive metres, got {args.square}", field="--square", hint="e.g. 0.025")
+    if args.distance is not None and not args.distance > 0:
+        raise DepthError(f"must be positive metres, got {args.distance}", field="--distance", hint="e.g. 1.5")
+    if args.depth_scale <= 0:
+        raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
+
+
+def _folder_views(args: argparse.Namespace, profile: StereoProfile
+                  ) -> tuple[Iterator[DepthView], int, float, str, tuple[float, float] | None]:
+    from s2r.depth.pipeline import StereoPipeline
+    from s2r.quality.inputs import DEPTH_SUFFIXES, IMAGE_SUFFIXES, FramePaths, list_files, pair_files
+    from s2r.quality.views import device_fb, device_views, stereo_fb, stereo_views, stereo_visible_m
+
+    if args.right is not None:
+        left = list_files(args.left, IMAGE_SUFFIXES, option="--left")
+        frames = pair_files(left, list_files(args.right, IMAGE_SUFFIXES, option="--right"), kind="right")
+        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
+        return (stereo_views(pipeline, frames), len(frames), stereo_fb(pipeline), f"stereo, preset {args.preset}",
+                stereo_visible_m(pipeline))
+    depth = list_files(args.depth, DEPTH_SUFFIXES, option="--depth")
+    if args.left is None:  # flat wall without images
+        frames = [FramePaths(d, depth=d) for d in depth]
+    else:
+        frames = pair_files(list_files(args.left, IMAGE_SUFFIXES, option="--left"), depth, kind="depth")
+    return device_views(profile, frames, depth_scale_m=args.depth_scale), len(frames), device_fb(profile), \
+        "device depth", None
+
+
+def _bag_views(args: argparse.Namespace, profile: StereoProfile
+               ) -> tuple[Iterator[DepthView], int | None, float, str, tuple[float, float] | None]:
+    from s2r.depth.pipeline import StereoPipeline
+    from s2r.quality.views import bag_device_views, bag_stereo_views, device_fb, stereo_fb, stereo_visible_m
+
+    if args.right_topic is not None:
+        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
+        views = bag_stereo_views(pipeline, args.bag, args.left_topic, args.right_topic, max_dt_s=args.max_dt)
+        return views, None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}", stereo_visible_m(pipeline)
+    views = bag_device_views(profile, args.bag, args.left_topic, args.depth_topic, max_dt_s=args.max_dt,
+                             depth_scale_m=args.depth_scale)
+    return views, None, device_fb(profile), "device depth from bag", None
+
+
+def _measure(args: argparse.Namespace, profile: StereoProfile) -> QualityResult:
+    from s2r.quality.run import measure_board_views, measure_wall_views
+
+    source_of = _bag_views if args.bag is not None else _folder_views
+    views, total, fb, source, visible = source_of(args, profile)
+    bar = ProgressBar(enabled=False if (args.quiet or args.json) else None)
+    if args.wall:
+        return measure_wall_views(profile, views, fb_px_m=fb, source=f"{source}, flat wall",
+                                  roi_fraction=args.roi, distance_m=args.distance, progress=bar, total=total)
+    return measure_board_views(profile, views, pattern=args.pattern, square_m=args.square, fb_px_m=fb,
+                               source=source, total=total, visible_m=visible, progress=bar)
+
+
+def _cmd_depth_quality(args: argparse.Namespace) -> int:
+    from s2r.quality.report import quality_lines, write_quality_report
+
+    _check_args(args)
+    profile = load_profile(args.profile)
+    if args.report:
+        prepare_output_dir(args.report, force=args.force)
+        check_output_free(Path(args.report) / "depth_quality.html", force=args.force)
+    result = _measure(args, profile)
+    if args.json:
+        print_json(result.as_dict())
+    else:
+        print("\n".join(quality_lines(result)))
+    if args.report:
+        path = write_quality_report(result, args.report, force=True)
+        print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
+    return 0

@@ -1,0 +1,65 @@
+"""CLI start-up and names: light commands import no heavy library; a profile-name typo gets "did you mean".
+
+Start-up time itself is measured by bench/bench_cli_startup.py (tests never assert wall-clock times): here a
+fresh interpreter checks which modules ``import s2r.cli`` and a light command load.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from s2r.cli import main
+from s2r.cli.sources_cmd import CONVENTION_CHOICES, EXPORT_FORMAT_CHOICES
+from s2r.registry import did_you_mean, list_profiles
+
+HEAVY = ("scipy", "cv2", "matplotlib", "pybullet", "rosbags", "xacro")
+
+
+def _loaded_after(code: str) -> list[str]:
+    probe = (f"import sys\n{code}\nimport json\n"
+             f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    return list(json.loads(out.strip().splitlines()[-1]))
+
+
+def test_importing_the_cli_loads_no_heavy_library() -> None:
+    assert _loaded_after("import s2r.cli") == []
+
+
+def test_profile_show_and_list_load_no_heavy_library() -> None:
+    code = ("from s2r.cli import main\nimport contextlib, io\nwith contextlib.redirect_stdout(io.StringIO()):\n"
+            "    main(['profile', 'show', 'realsense_d435_848x480']); main(['profile', 'list'])")
+    assert _loaded_after(code) == []
+
+
+def test_parser_choices_match_the_library() -> None:
+    from s2r.sources import CONVENTIONS, EXPORT_FORMATS
+
+    assert CONVENTION_CHOICES == CONVENTIONS and EXPORT_FORMAT_CHOICES == EXPORT_FORMATS
+
+
+@pytest.mark.parametrize(("typo", "meant"), [
+    ("realsense_d435_848x48", "realsense_d435_848x480"),
+    ("realsens_d435_1280x720", "realsense_d435_1280x720"),
+    ("Gazebo_Dual_Camera", "gazebo_dual_camera"),
+    ("gazebo_dual_cam", "gazebo_dual_camera"),
+    ("xbot", "xbot_u_stereo"),
+])
+def test_a_profile_typo_gets_did_you_mean(typo: str, meant: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["profile", "show", typo]) == 2
+    err = capsys.readouterr().err
+    assert f"did you mean '{meant}'" in err and err.count("\n") == 1
+
+
+def test_a_file_name_typo_gets_did_you_mean(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["profile", "show", "realsense_d435_848x48.yaml"]) == 2
+    assert "did you mean 'realsense_d435_848x480'" in capsys.readouterr().err
+
+
+def test_no_close_name_lists_the_known_ones() -> None:
+    text = did_you_mean("zzz", list_profiles())
+    assert "did you mean" not in text and "realsense_d435_848x480" in text
