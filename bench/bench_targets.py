@@ -28,9 +28,9 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from s2r.calib.target_stereo import calibrate_stereo_target  # noqa: E402
-from s2r.targets import target_from_mapping  # noqa: E402
-from tests import raycast as rc  # noqa: E402
+from s2r.calib.target_stereo import calibrate_stereo_target
+from s2r.targets import target_from_mapping
+from tests import raycast as rc
 
 RIGS = {
     "charuco_pinhole": lambda: rc.pinhole_rig(rc.charuco_target(), "charuco_pinhole"),
@@ -170,7 +170,7 @@ def main() -> None:
         for method, fn in (("s2r", run_s2r), ("plain OpenCV", plain_opencv)):
             try:
                 r = fn(folder, rig, target)
-            except Exception as exc:  # noqa: BLE001 - the anchor may fail; say so
+            except Exception as exc:
                 print(f"{name:<18} {method:<13} failed: {str(exc).strip().splitlines()[-1][:80]}")
                 continue
             print(f"{name:<18} {method:<13} {r['focal_pct']:>11.3f} {r['pp_px']:>9.2f} {r['baseline_pct']:>10.3f} "

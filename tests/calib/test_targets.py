@@ -64,7 +64,7 @@ def test_charuco_points_match_opencv(tmp_path: Path) -> None:
     ours = t.object_points()
     theirs = np.asarray(charuco_board(t).getChessboardCorners(), np.float64)
     np.testing.assert_allclose(ours, theirs, atol=1e-9)
-    assert cv2.aruco.DICT_4X4_50 == getattr(cv2.aruco, t.dictionary)
+    assert getattr(cv2.aruco, t.dictionary) == cv2.aruco.DICT_4X4_50
 
 
 @pytest.mark.parametrize(("text", "field"), [
