@@ -7,10 +7,7 @@ import hashlib
 import io
 import os
 import stat
-import sys
 import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 from xml.parsers import expat
@@ -27,7 +24,6 @@ __all__ = [
     "atomic_write_text",
     "check_output_dir",
     "check_output_free",
-    "native_stderr_captured",
     "parse_yaml",
     "prepare_output_dir",
     "read_text_file",
@@ -293,30 +289,3 @@ def run_xml_parser(parser: Any, text: str, *, path: str | Path, error: type[S2RE
     except expat.ExpatError as exc:
         raise error(f"malformed XML: {expat.ErrorString(exc.code)} at column {exc.offset + 1}", path=path,
                     field=f"line {exc.lineno}", hint="fix the XML syntax there (unclosed or mismatched tag?)") from None
-
-
-@contextmanager
-def native_stderr_captured() -> Iterator[list[str]]:
-    """Capture what native code writes to file descriptor 2 inside the block (libjpeg's "Premature end of JPEG
-    file", libpng's "libpng error: Read Error", OpenCV's own log lines): the yielded list receives the
-    non-empty lines when the block ends, for the caller to report as one warning naming the file.
-
-    Process-wide while it lasts: keep the block to the native call (a decoder), not to code that prints.
-    """
-    lines: list[str] = []
-    try:
-        saved = os.dup(2)
-    except OSError:
-        yield lines
-        return
-    with tempfile.TemporaryFile() as capture:
-        sys.stderr.flush()
-        os.dup2(capture.fileno(), 2)
-        try:
-            yield lines
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            capture.seek(0)
-            text = capture.read(4096).decode("utf-8", errors="replace")
-            lines.extend(line.strip() for line in text.splitlines() if line.strip())

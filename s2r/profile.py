@@ -359,6 +359,8 @@ class CalibrationQuality(_Model):
     tilt_range_deg: tuple[float, float] | None = None
     distance_range_m: tuple[float, float] | None = None
     distortion_terms: str = "k1k2"
+    #: the calibration target when not a ``--pattern`` chessboard (e.g. ``aprilgrid 6x6 tags of 88 mm``).
+    target: str | None = None
 
 
 class SimulationSettings(_Model):

@@ -18,7 +18,6 @@ Depth outside the profile's working range (``matcher.min_depth_m`` .. ``max_dept
 
 from __future__ import annotations
 
-import logging
 from dataclasses import replace
 from pathlib import Path
 
@@ -28,8 +27,9 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
-from s2r.fileio import atomic_write_bytes, atomic_write_npy, atomic_write_text, native_stderr_captured
+from s2r.fileio import atomic_write_bytes, atomic_write_npy, atomic_write_text
 from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml
+from s2r.imageio import decode_image_file
 from s2r.rectification import StereoRectification
 
 __all__ = [
@@ -56,15 +56,9 @@ def read_image(path: str | Path) -> NDArray[np.uint8]:
     path = Path(path)
     if not path.is_file():
         raise DepthError("image file not found", path=path, hint="check the path")
-    data = np.fromfile(path, dtype=np.uint8)
-    with native_stderr_captured() as decoder_notes:  # no bare libjpeg/libpng lines on stderr
-        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
-    if decoder_notes and image is not None:
-        logging.getLogger(__name__).warning("%s: the image decoder reported %r; the image may be damaged", path,
-                       "; ".join(decoder_notes)[:200])
+    image, reason = decode_image_file(path, cv2.IMREAD_UNCHANGED)
     if image is None:
-        raise DepthError("cannot read image (not an image file, or corrupt)", path=path,
-                         hint="pass a PNG/JPEG/BMP/TIFF/PGM image")
+        raise DepthError(f"cannot read image: {reason}", path=path, hint="pass a PNG/JPEG/BMP/TIFF/PGM image")
     if image.dtype != np.uint8:
         raise DepthError(f"image has {image.dtype} pixels; the matcher needs 8-bit", path=path,
                          hint="convert it to 8-bit grey or colour")
