@@ -5,16 +5,13 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from s2r.cli._common import add_force, add_json, print_json
+from s2r.cli._common import add_force, add_json, load_profile, print_json
 from s2r.errors import FormatError
-from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
-from s2r.formats.kalibr import dump_kalibr
-from s2r.formats.mono import dump_mono, is_mono_profile_file
-from s2r.formats.s2r_yaml import dump_profile, load_mono_profile
-from s2r.profile import MonoProfile, StereoProfile
-from s2r.registry import list_profiles, load_profile, resolve_profile
+
+if TYPE_CHECKING:  # the formats and the profile models load when a command runs, not when the parser is built
+    from s2r.profile import MonoProfile, StereoProfile
 
 __all__ = ["mono_summary", "profile_summary", "register"]
 
@@ -104,6 +101,8 @@ def profile_summary(profile: StereoProfile) -> dict[str, Any]:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
+    from s2r.registry import list_profiles
+
     profiles = list_profiles()
     if args.json:
         print_json({name: str(path) for name, path in profiles.items()})
@@ -125,6 +124,8 @@ def mono_summary(profile: MonoProfile) -> dict[str, Any]:
 
 
 def _show_mono(path: Path, as_json: bool) -> int:
+    from s2r.formats.s2r_yaml import load_mono_profile
+
     profile = load_mono_profile(path)
     summary = mono_summary(profile)
     if as_json:
@@ -142,6 +143,9 @@ def _show_mono(path: Path, as_json: bool) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
+    from s2r.formats.mono import is_mono_profile_file
+    from s2r.registry import resolve_profile
+
     path = resolve_profile(args.profile)
     if is_mono_profile_file(path):
         return _show_mono(path, args.json)
@@ -173,8 +177,12 @@ def _cmd_show(args: argparse.Namespace) -> int:
 def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
     out = Path(args.output)
     if args.to == "s2r":
+        from s2r.formats.s2r_yaml import dump_profile
+
         return [dump_profile(profile, out, force=args.force)]
     if args.to == "kalibr":
+        from s2r.formats.kalibr import dump_kalibr
+
         return [dump_kalibr(profile, out, force=args.force, drop_k3=args.drop_k3)]
     if args.to == "ros":
         from s2r.formats.ros import dump_ros_pair  # local: OpenCV (rectification) loads only when needed
@@ -187,6 +195,9 @@ def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
 
 def _convert_mono(path: Path, args: argparse.Namespace) -> int:
     """A mono profile to s2r, ROS (one camera_info file), Kalibr (cam0) or OpenCV (camera_matrix ...)."""
+    from s2r.formats.mono import dump_mono
+    from s2r.formats.s2r_yaml import dump_profile, load_mono_profile
+
     profile = load_mono_profile(path)
     if args.name:
         profile = profile.model_copy(update={"name": args.name})
@@ -204,6 +215,10 @@ def _convert_mono(path: Path, args: argparse.Namespace) -> int:
 
 
 def _cmd_convert(args: argparse.Namespace) -> int:
+    from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
+    from s2r.formats.mono import is_mono_profile_file
+    from s2r.registry import resolve_profile
+
     if len(args.src) > 2:
         raise FormatError(f"expected one or two inputs, got {len(args.src)}", field="SRC",
                           hint="two inputs are a ROS left/right pair or OpenCV intrinsics + extrinsics")

@@ -8,11 +8,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import add_force, add_json, print_json
+from s2r.cli._common import add_force, add_json, load_profile, print_json
 from s2r.errors import SourceError
 from s2r.fileio import atomic_write_text, check_output_free
-from s2r.formats.s2r_yaml import dump_profile, profile_to_yaml
-from s2r.registry import load_profile
 
 __all__ = ["CONVENTION_CHOICES", "EXPORT_FORMAT_CHOICES", "parse_xacro_args", "register"]
 
@@ -120,6 +118,7 @@ def _cmd_lint(args: argparse.Namespace) -> int:
 
 
 def _cmd_from_urdf(args: argparse.Namespace) -> int:
+    from s2r.formats.s2r_yaml import dump_profile
     from s2r.sources.profile_builder import load_description_profile
 
     check_output_free(args.output, force=args.force)
@@ -156,6 +155,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_regenerate(args: argparse.Namespace) -> int:
+    from s2r.formats.s2r_yaml import profile_to_yaml
     from s2r.sources.shipped import REPO_ROOT, shipped_profiles
 
     stale = 0

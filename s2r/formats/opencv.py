@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from s2r.errors import FormatError
 from s2r.fileio import atomic_write_text
 from s2r.formats._common import (
+    MAX_ABS_VALUE,
     as_int,
     as_matrix,
     build_camera,
@@ -131,6 +132,9 @@ def _array(nodes: dict[str, NodeValue | None], key: str, path: Path) -> FloatArr
         raise FormatError("expected a matrix", path=path, field=key)
     if not np.all(np.isfinite(value)):
         raise FormatError("must hold finite numbers only (found NaN or inf)", path=path, field=key)
+    if value.size and float(np.max(np.abs(value))) > MAX_ABS_VALUE:
+        raise FormatError(f"holds {float(np.max(np.abs(value))):g}, beyond {MAX_ABS_VALUE:g} in magnitude: no "
+                          "calibration value is that large (corrupted file or wrong units?)", path=path, field=key)
     return value
 
 

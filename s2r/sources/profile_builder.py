@@ -168,15 +168,15 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
                       name: str | None = None, xacro_args: Mapping[str, str] | None = None) -> StereoProfile:
     """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
     source = description.path
-    left_cam = _camera(pair.left, convention)
-    right_cam = _camera(pair.right, convention)
-    extrinsics = _extrinsics(pair, source)
-    baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
-    simulation = _simulation(pair.left)
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
     notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
              f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
-    try:
+    try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
+        left_cam = _camera(pair.left, convention)
+        right_cam = _camera(pair.right, convention)
+        extrinsics = _extrinsics(pair, source)
+        baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
+        simulation = _simulation(pair.left)
         return StereoProfile(
             name=name or _default_name(source),
             description=f"{description.kind.upper()} stereo pair from {source.name} ({convention} convention)",

@@ -119,8 +119,17 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         level = calib_log.level
         calib_log.setLevel(logging.ERROR)  # coverage advice is kept in the result, not shown as warnings
         try:
-            calib = calibrate_stereo(boards.left_paths, boards.right_paths, name=f"{profile.name}_recovered",
-                                     jobs=jobs, progress=progress)
+            if profile.left.distortion.model == "equidistant":  # a fisheye lens: OpenCV's equidistant model
+                from s2r.calib.target_stereo import calibrate_stereo_target
+                from s2r.targets import CheckerboardTarget
+
+                board = CheckerboardTarget(target_type="checkerboard", targetCols=9, targetRows=6,
+                                           rowSpacingMeters=0.025, colSpacingMeters=0.025)
+                calib = calibrate_stereo_target(boards.left_paths, boards.right_paths, target=board, lens="fisheye",
+                                                name=f"{profile.name}_recovered", jobs=jobs, progress=progress)
+            else:
+                calib = calibrate_stereo(boards.left_paths, boards.right_paths, name=f"{profile.name}_recovered",
+                                         jobs=jobs, progress=progress)
         finally:
             calib_log.setLevel(level)
         done = time.perf_counter()
