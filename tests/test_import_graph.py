@@ -13,7 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 LAYERS: dict[str, int] = {
     "_version": 0, "errors": 0, "progress": 0,
     "fileio": 1, "geometry": 1,  # fileio and geometry do not import each other
-    "profile": 2,
+    "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,
     "registry": 5, "htmlreport": 5,

@@ -94,7 +94,7 @@ def load_zed(path: str | Path, *, resolution: tuple[int, int] | None = None, nam
     ty = _number(stereo, f"TY_{res}", source, _number(stereo, "TY", source, 0.0))
     tz = _number(stereo, f"TZ_{res}", source, _number(stereo, "TZ", source, 0.0))
     rvec = [_number(stereo, f"{k}_{res}", source, 0.0) for k in ("RX", "CV", "RZ")]
-    from scipy.spatial.transform import Rotation  # local: loading other profiles (and the CLI) needs no scipy
+    from scipy.spatial.transform import Rotation  # local: profile show/convert start without scipy
 
     R = np.asarray(Rotation.from_rotvec(rvec).as_matrix(), dtype=np.float64)  # = cv2.Rodrigues(rvec)
     T = np.array([-baseline_mm, ty, tz]) / 1000.0
