@@ -28,6 +28,9 @@ from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
+from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+
+AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 
 __all__ = ["BagFrame", "bag_image_topics", "calibrate_stereo_bag", "paired_bag_frames"]
 
@@ -136,8 +139,10 @@ def calibrate_stereo_bag(
     distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
     swap: bool = False,
     jobs: int | None = None, cache_dir: Path | None = None, progress: ProgressCallback | None = None,
+    target: AnyTarget | None = None, lens: str = "pinhole",
 ) -> StereoCalibration:
-    """Calibrate a stereo pair from the image topics of a ROS bag; see :func:`s2r.calib.calibrate_stereo`.
+    """Calibrate a stereo pair from the image topics of a ROS bag; see :func:`s2r.calib.calibrate_stereo`
+    (with ``target``: corner ids and partial views through ``lens``, see :mod:`s2r.calib.target_stereo`).
 
     Raises:
         CalibrationError: bag unreadable, a topic missing (the message lists the bag's image topics),
@@ -160,15 +165,23 @@ def calibrate_stereo_bag(
                 yield DetectItem(name=f"{left_topic}@{fl.stamp_s:.3f}", sha256=fl.sha256, source=fl.image)
                 yield DetectItem(name=f"{right_topic}@{fr.stamp_s:.3f}", sha256=fr.sha256, source=fr.image)
 
-        cache = CornerCache(cache_dir) if cache_dir is not None else None
+        cache = CornerCache(cache_dir, target) if cache_dir is not None else None
         dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
-                                  total=2 * max(1, n_max // every), progress=progress))
+                                  total=2 * max(1, n_max // every), progress=progress, target=target))
     finally:
         reader.close()
     if not names:
         raise CalibrationError(f"no {left_topic} / {right_topic} messages with stamps within {max_dt_s} s",
                                path=bag, field="--max-dt", hint="raise --max-dt or check the topics")
     pairs = [(n, dets[2 * i], dets[2 * i + 1]) for i, n in enumerate(names)]
+    if target is not None:
+        from s2r.calib.target_stereo import calibrate_stereo_target_detections
+
+        result = calibrate_stereo_target_detections(
+            pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
+            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag))
+        sample = next((samples[n] for n in result.used_names if n in samples), None)
+        return replace(result, sample_images=sample if sample is None or not swap else (sample[1], sample[0]))
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
         fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag))

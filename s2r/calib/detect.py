@@ -18,15 +18,22 @@ over the pattern's ``(cols, rows)`` inner corners.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import hashlib
 import json
 import math
 import multiprocessing as mp
+import os
+import signal
+import sys
+import threading
+import time
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import cv2
 import numpy as np
@@ -34,7 +41,13 @@ from numpy.typing import NDArray
 
 from s2r.errors import S2RError
 from s2r.fileio import atomic_write_text
+from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
+
+if TYPE_CHECKING:
+    from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+
+    AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 
 __all__ = [
     "DETECTOR_VERSION",
@@ -66,7 +79,8 @@ class Detection:
 
     ``size`` is ``(width, height)`` in pixels (None when unreadable); ``corners`` (N, 2) float32 pixels
     when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"`` or ``"sb"``; ``detail`` says
-    why it failed.
+    why it failed. ``ids`` (N,) int32 are the target's corner ids of ``corners`` when a file-described
+    target (``--target``) was detected; None for a ``--pattern`` chessboard (all corners, row-major).
     """
 
     name: str
@@ -77,6 +91,7 @@ class Detection:
     detector: str = ""
     detail: str = ""
     cached: bool = False
+    ids: NDArray[np.int32] | None = None
 
 
 @dataclass(frozen=True)
@@ -164,15 +179,23 @@ def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Cor
     return np.asarray(refined, np.float32).reshape(-1, 2), detector
 
 
-def _detect_item(item: DetectItem, pattern: tuple[int, int]) -> Detection:
-    """Worker: read (if a path), detect, and describe the outcome."""
+def _detect_item(item: DetectItem, pattern: tuple[int, int], target: AnyTarget | None = None) -> Detection:
+    """Worker: read (if a path), detect (``target`` when given, else the ``pattern`` chessboard), describe."""
     if isinstance(item.source, Path):
-        gray = cv2.imread(str(item.source), cv2.IMREAD_GRAYSCALE)
+        gray, reason = decode_image_file(item.source, cv2.IMREAD_GRAYSCALE)
         if gray is None:
-            return Detection(item.name, item.sha256, "unreadable", detail="not a readable image (corrupt or empty)")
+            return Detection(item.name, item.sha256, "unreadable", detail=f"not a readable image: {reason}")
     else:
         gray = item.source
     size = (int(gray.shape[1]), int(gray.shape[0]))
+    if target is not None:
+        from s2r.calib.markers import detect_target  # markers builds on detect_board
+
+        found, name = detect_target(np.ascontiguousarray(gray, np.uint8), target)
+        if found is None:
+            return Detection(item.name, item.sha256, "no_board", size=size, detector=name,
+                             detail=f"no {target.describe()} found (or too few corners)")
+        return Detection(item.name, item.sha256, "ok", size=size, corners=found[1], detector=name, ids=found[0])
     corners, detector = detect_board(np.ascontiguousarray(gray, np.uint8), pattern)
     if corners is None:
         return Detection(item.name, item.sha256, "no_board", size=size,
@@ -187,11 +210,27 @@ class CornerCache:
     detection and a re-run (e.g. with other solver options) reads them back instead of detecting again.
     """
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, target: AnyTarget | None = None) -> None:
         self.folder = Path(folder)
+        self.target_key = "" if target is None else hashlib.sha256(
+            target.model_dump_json().encode()).hexdigest()[:16]
+        self.remove_stale_temporaries()
+
+    def remove_stale_temporaries(self, max_age_s: float = 60.0) -> int:
+        """Delete half-written ``.*.tmp`` files older than ``max_age_s`` (left by a killed run); their count."""
+        removed = 0
+        now = time.time()
+        with contextlib.suppress(OSError):
+            for tmp in self.folder.glob(".*.tmp"):
+                with contextlib.suppress(OSError):
+                    if now - tmp.lstat().st_mtime > max_age_s:
+                        tmp.unlink()
+                        removed += 1
+        return removed
 
     def _file(self, sha256: str, pattern: tuple[int, int]) -> Path:
-        return self.folder / f"{sha256}-{pattern[0]}x{pattern[1]}-v{DETECTOR_VERSION}.json"
+        board = f"t{self.target_key}" if self.target_key else f"{pattern[0]}x{pattern[1]}"
+        return self.folder / f"{sha256}-{board}-v{DETECTOR_VERSION}.json"
 
     def get(self, name: str, sha256: str, pattern: tuple[int, int]) -> Detection | None:
         """The cached detection of this content, renamed to ``name``, or None."""
@@ -201,16 +240,46 @@ class CornerCache:
             return None
         corners = None if data.get("corners") is None else np.asarray(data["corners"], np.float32).reshape(-1, 2)
         size = None if data.get("size") is None else (int(data["size"][0]), int(data["size"][1]))
+        ids = None if data.get("ids") is None else np.asarray(data["ids"], np.int32).reshape(-1)
+        if self.target_key and corners is not None and (ids is None or len(ids) != len(corners)):
+            return None  # a target's entry must carry one id per corner
         return Detection(name, sha256, data["status"], size=size, corners=corners,
-                         detector=data.get("detector", ""), detail=data.get("detail", ""), cached=True)
+                         detector=data.get("detector", ""), detail=data.get("detail", ""), cached=True, ids=ids)
 
     def put(self, det: Detection, pattern: tuple[int, int]) -> None:
         """Store ``det`` (atomic write; a failure to write the cache is not an error)."""
         data: dict[str, Any] = {"status": det.status, "size": det.size, "detector": det.detector,
                                 "detail": det.detail,
                                 "corners": None if det.corners is None else det.corners.round(4).tolist()}
+        if det.ids is not None:
+            data["ids"] = det.ids.astype(int).tolist()
         with contextlib.suppress(OSError, S2RError):
             atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True)
+
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+_WATCHDOG_PERIOD_S = 1.0
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Pool initializer: end this worker when the parent process dies, even by ``kill -9``.
+
+    On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
+    thread also watches the parent pid once a second and exits when the worker was re-parented.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(_WATCHDOG_PERIOD_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
 
 
 def _executor(jobs: int) -> ProcessPoolExecutor:
@@ -218,13 +287,15 @@ def _executor(jobs: int) -> ProcessPoolExecutor:
     # without a main guard keep working); spawn where fork does not exist. Never call cv2.setNumThreads in a
     # forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
+                               initargs=(os.getpid(),))
 
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,
                   cache: CornerCache | None = None, total: int | None = None,
-                  progress: ProgressCallback | None = None) -> Iterator[Detection]:
-    """Detect every item, in input order, over ``jobs`` worker processes.
+                  progress: ProgressCallback | None = None, target: AnyTarget | None = None) -> Iterator[Detection]:
+    """Detect every item, in input order, over ``jobs`` worker processes (the ``target``'s corners with
+    their ids when given, else the ``pattern`` chessboard; a cache must then be made for that target).
 
     Items are consumed lazily and at most ``4 * jobs`` are in flight, so images are never all in memory.
     Cache hits skip detection; each new result is written to the cache the moment its worker finishes.
@@ -257,10 +328,10 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
             if hit is not None:
                 pending.append(hit)
             elif jobs <= 1:
-                pending.append(_detect_item(item, pattern))
+                pending.append(_detect_item(item, pattern, target))
             else:
                 pool = pool or _executor(jobs)
-                future = pool.submit(_detect_item, item, pattern)
+                future = pool.submit(_detect_item, item, pattern, target)
                 future.add_done_callback(store)
                 pending.append(future)
             while len(pending) >= window or (pending and isinstance(pending[0], Detection)):

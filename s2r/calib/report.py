@@ -74,7 +74,11 @@ def _error_chart(names: list[str], series: dict[str, list[float]], used: list[bo
 
 def _overlay(image: Image, corners: NDArray[np.float32], pattern: tuple[int, int]) -> str:
     colour = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image.copy()
-    cv2.drawChessboardCorners(colour, pattern, corners.reshape(-1, 1, 2), True)
+    if len(corners) == pattern[0] * pattern[1]:
+        cv2.drawChessboardCorners(colour, pattern, corners.reshape(-1, 1, 2), True)
+    else:  # a partial view of a target: the corners seen
+        for x, y in corners.reshape(-1, 2):
+            cv2.circle(colour, (round(float(x)), round(float(y))), 4, (0, 0, 255), 1, cv2.LINE_AA)
     return image_to_data_uri(colour)
 
 
@@ -83,7 +87,10 @@ def _rectified_pair(result: StereoCalibration, left: Image, right: Image) -> str
     rect = stereo_rectification(p)
     out = []
     for img, cam, R, P in ((left, p.left, rect.R1, rect.P1), (right, p.right, rect.R2, rect.P2)):
-        m1, m2 = cv2.initUndistortRectifyMap(cam.K, cam.D, R, P, p.image_size, cv2.CV_32FC1)
+        if cam.distortion.model == "equidistant":
+            m1, m2 = cv2.fisheye.initUndistortRectifyMap(cam.K, cam.D, R, P[:, :3], p.image_size, cv2.CV_32FC1)
+        else:
+            m1, m2 = cv2.initUndistortRectifyMap(cam.K, cam.D, R, P, p.image_size, cv2.CV_32FC1)
         warped = cv2.remap(img, m1, m2, cv2.INTER_LINEAR)
         out.append(cv2.cvtColor(warped, cv2.COLOR_GRAY2BGR) if warped.ndim == 2 else warped)
     pair = np.hstack(out)

@@ -10,11 +10,12 @@ from typing import Any
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.errors import CalibrationError
 from s2r.fileio import check_output_free, prepare_output_dir
-from s2r.formats.s2r_yaml import dump_profile
 
 __all__ = ["register"]
 
 EXIT_OK = 0
+#: s2r.calib.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+DEFAULT_LENS = "k1k2p1p2"
 
 
 def register(sub: Any) -> None:
@@ -31,8 +32,14 @@ def register(sub: Any) -> None:
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
     p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
-    p.add_argument("--distortion", choices=("k1k2p1p2", "k1k2", "plumb_bob", "rational"), default="k1k2p1p2",
-                   help="distortion terms to solve (default k1k2p1p2: k3 fixed at 0, as ROS camera_calibration)")
+    p.add_argument("--distortion", choices=("k1k2p1p2", "k1k2", "plumb_bob", "rational", "equidistant"),
+                   default="k1k2p1p2",
+                   help="distortion terms to solve (default k1k2p1p2: k3 fixed at 0, as ROS camera_calibration; "
+                        "equidistant = --lens fisheye)")
+    p.add_argument("--target", type=Path, default=None, metavar="TARGET.yaml",
+                   help="board described by a file: Kalibr aprilgrid / checkerboard, or charuco (partial views used)")
+    p.add_argument("--lens", choices=("pinhole", "fisheye"), default="pinhole",
+                   help="projection model: pinhole (OpenCV's k1..k6 models) or fisheye (equidistant k1..k4)")
     p.add_argument("--max-error", type=float, default=None, metavar="PX",
                    help="drop views whose RMS exceeds PX (default: a robust median/MAD threshold)")
     p.add_argument("--fix-intrinsics", action="store_true",
@@ -53,6 +60,24 @@ def register(sub: Any) -> None:
     add_json(p)
     add_force(p)
     p.set_defaults(func=run)
+
+
+def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tuple[str, Any]:
+    """``(lens, target or None)``: a target file, or the --pattern chessboard when the lens is a fisheye."""
+    lens = "fisheye" if args.distortion == "equidistant" else args.lens
+    if lens == "fisheye" and args.distortion not in (DEFAULT_LENS, "equidistant"):
+        raise CalibrationError(f"--distortion {args.distortion} is a pinhole model; a fisheye lens solves the "
+                               "equidistant k1..k4", field="--distortion", hint="drop --distortion or --lens")
+    if args.target is not None:
+        from s2r.targets import load_target
+
+        return lens, load_target(args.target)
+    if lens == "fisheye":
+        from s2r.targets import CheckerboardTarget
+
+        return lens, CheckerboardTarget(target_type="checkerboard", targetCols=pattern[0], targetRows=pattern[1],
+                                        rowSpacingMeters=args.square, colSpacingMeters=args.square)
+    return lens, None
 
 
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
@@ -77,7 +102,10 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``s2r calibrate``; returns the exit code."""
+    from s2r.formats.s2r_yaml import dump_profile
+
     pattern = _check_args(args)
+    lens, target = _lens_and_target(args, pattern)
     out = check_output_free(args.output, force=args.force)
     if args.report is not None:
         prepare_output_dir(args.report, force=args.force)
@@ -88,7 +116,9 @@ def run(args: argparse.Namespace) -> int:
         "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
     }
     result: Any
-    if args.mono:
+    if target is not None:
+        result = _run_target(args, target, lens, common)
+    elif args.mono:
         from s2r.calib.inputs import find_mono_images
         from s2r.calib.mono import calibrate_mono
 
@@ -128,6 +158,31 @@ def _pm(value: float, sd: float | None, digits: int = 2) -> str:
     if sd is None:
         return f"{value:.{digits}f}±?"
     return f"{value:.{digits}f}±{sd:.2g}"
+def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
+    """Calibrate with corner ids (a target file, or a fisheye lens): mono, folder/glob pairs or a bag."""
+    kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
+    kw.update(target=target, lens=lens,
+              distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
+    if args.mono:
+        from s2r.calib.inputs import find_mono_images
+        from s2r.calib.target_stereo import calibrate_mono_target
+
+        if args.bag is not None:
+            raise CalibrationError("--mono from a bag is not supported", field="--bag",
+                                   hint="export the images to a folder first")
+        return calibrate_mono_target(find_mono_images(args.input, image_glob=args.left), **kw)
+    if args.bag is not None:
+        from s2r.calib.bags import calibrate_stereo_bag
+
+        return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
+                                    max_dt_s=args.max_dt, every=args.every, fix_intrinsics=args.fix_intrinsics,
+                                    swap=args.swap, **common, target=target, lens=lens)
+    from s2r.calib.inputs import find_stereo_pairs
+    from s2r.calib.target_stereo import calibrate_stereo_target
+
+    pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
+    return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                                   fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
 
 
 def _print_summary(result: Any, out: Path) -> None:

@@ -3,15 +3,26 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_distances, parse_pattern, print_json
-from s2r.registry import load_profile
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_json,
+    argparse_type,
+    load_profile,
+    parse_distances,
+    parse_pattern,
+    print_json,
+)
+from s2r.errors import RenderError
+from s2r.fileio import atomic_write_text
 
 __all__ = ["SCENE_CHOICES", "register"]
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
-SCENE_CHOICES = ("planes", "slanted", "room")
+SCENE_CHOICES = ("planes", "slanted", "span", "room")
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -42,6 +53,11 @@ def register(sub: Any) -> None:
     p_boards.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6), metavar="COLSxROWS",
                           help="inner corners (default 9x6)")
     p_boards.add_argument("--square", type=float, default=0.025, metavar="M", help="square size in metres")
+    p_boards.add_argument("--target", type=Path, default=None, metavar="TARGET.yaml",
+                          help="render a ChArUco board or Kalibr AprilGrid/checkerboard described by this file "
+                               "(instead of --pattern); copied into DIR as target.yaml")
+    p_boards.add_argument("--cut-share", type=float, default=None, metavar="F",
+                          help="share of views cut by the image edge (default 0.4 for ChArUco/AprilGrid, else 0)")
     p_boards.set_defaults(func=_cmd_boards)
 
     p_scene = render_sub.add_parser(
@@ -60,17 +76,27 @@ def _cmd_boards(args: argparse.Namespace) -> int:
     from s2r.render import render_board_set
 
     profile = load_profile(args.profile)
+    target = None
+    if args.target is not None:
+        from s2r.targets import load_target
+
+        target = load_target(args.target)
+    if args.cut_share is not None and not 0.0 <= args.cut_share <= 1.0:
+        raise RenderError(f"--cut-share must be 0..1, got {args.cut_share}", field="--cut-share", hint="e.g. 0.4")
     bar = ProgressBar(enabled=None if not args.quiet else False)
     result = render_board_set(
         profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
         supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
-        right_gain=args.right_gain,
+        right_gain=args.right_gain, target=target, cut_share=args.cut_share,
     )
+    if args.target is not None:
+        atomic_write_text(result.out_dir / "target.yaml", args.target.read_text(encoding="utf-8"), force=True)
     if args.json:
         print_json({"out_dir": result.out_dir, "views": len(result.poses), "truth": result.truth_path})
     else:
-        print(f"wrote {len(result.poses)} stereo views of a {args.pattern[0]}x{args.pattern[1]} board to "
-              f"{result.out_dir} (truth: {result.truth_path.name})")
+        what = target.describe() if target is not None else f"{args.pattern[0]}x{args.pattern[1]} board"
+        print(f"wrote {len(result.poses)} stereo views of a {what} to {result.out_dir} "
+              f"(truth: {result.truth_path.name})")
     return 0
 
 

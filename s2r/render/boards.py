@@ -24,8 +24,14 @@ from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, num
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import BoardGeometry, sample_board_poses
 from s2r.render.rig import StereoJob, check_render_options, render_stereo_images, stereo_setups
+from s2r.render.target_boards import TargetLayout, cut_views, target_layout
 from s2r.render.textures import checkerboard_texture, write_png
 from s2r.render.world import Surface, write_mesh
+from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+
+AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
+#: Share of views cut by the image edge for targets identified corner by corner (ChArUco, AprilGrid).
+DEFAULT_CUT_SHARE = 0.4
 
 __all__ = ["BORDER_SQUARES", "BoardSet", "board_surface", "render_board_set"]
 
@@ -53,11 +59,12 @@ class BoardSet:
     poses: list[np.ndarray]
 
 
-def board_surface(tmp_dir: Path, board: BoardGeometry) -> tuple[str, str]:
-    """Write the board's texture (PNG) and mesh (OBJ, board frame) into ``tmp_dir``; return their paths."""
+def board_surface(tmp_dir: Path, board: BoardGeometry, layout: TargetLayout | None = None) -> tuple[str, str]:
+    """Write the board's texture (PNG) and mesh (OBJ, board frame) into ``tmp_dir``; return their paths
+    (``layout``: a file-described target's texture and extent instead of the chessboard)."""
     texture = checkerboard_texture(board.pattern, texels_per_square=TEXELS_PER_SQUARE,
-                                   border_squares=board.border_squares)
-    x0, y0, x1, y1 = board.extent_m
+                                   border_squares=board.border_squares) if layout is None else layout.texture
+    x0, y0, x1, y1 = board.extent_m if layout is None else layout.extent_m
     corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
     mesh = write_mesh(tmp_dir / "board.obj", [(corners, (0.0, 0.0, 1.0, 1.0))])
     return mesh, write_png(tmp_dir / "board.png", texture)
@@ -74,7 +81,7 @@ def _check_board(pattern: tuple[int, int], square_m: float, views: int) -> None:
 
 
 def _truth(profile: StereoProfile, board: BoardGeometry, names: list[str], poses: list[NDArray[np.float64]],
-           options: dict[str, Any]) -> str:
+           options: dict[str, Any], target: AnyTarget | None = None, cut: list[bool] | None = None) -> str:
     data = {
         "format": "s2r-render-boards",
         "schema_version": 1,
@@ -89,6 +96,10 @@ def _truth(profile: StereoProfile, board: BoardGeometry, names: list[str], poses
             for n, T in zip(names, poses, strict=True)
         ],
     }
+    if target is not None:  # T_left_board is then the target's own frame (s2r.targets), cut views marked
+        data["board_frame"] = "the target's frame (s2r.targets): " + target.describe()
+        data["target"] = target.model_dump(mode="json")
+        data["views_cut_by_edge"] = [n for n, c in zip(names, cut or [], strict=False) if c]
     return "# s2r rendered calibration set: ground truth (metres, OpenCV optical frames)\n" + yaml.safe_dump(
         data, sort_keys=False, width=120)
 
@@ -97,7 +108,7 @@ def render_board_set(
     profile: StereoProfile, out_dir: str | Path, *, views: int = 20, pattern: tuple[int, int] = (9, 6),
     square_m: float = 0.025, seed: int = 0, supersample: int = 2, noise_sigma: float = 0.0,
     jobs: int | None = None, force: bool = False, progress: ProgressCallback | None = None,
-    right_gain: float = 1.0,
+    right_gain: float = 1.0, target: AnyTarget | None = None, cut_share: float | None = None,
 ) -> BoardSet:
     """Render a stereo calibration set of ``views`` chessboard views through ``profile`` into ``out_dir``.
 
@@ -114,17 +125,28 @@ def render_board_set(
         force: reuse a non-empty ``out_dir`` (replaces the set's own numbered files).
         progress: ``callback(done, total, label)``.
         right_gain: exposure/gain of the right camera relative to the left.
+        target: a file-described board (ChArUco, Kalibr AprilGrid or checkerboard) instead of ``pattern``.
+        cut_share: share of views moved so the image edge cuts the board (default 0.4 with a ChArUco or
+            AprilGrid target, whose corners are identified one by one; 0 otherwise).
     """
     _check_board(pattern, square_m, views)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
+    layout = None if target is None else target_layout(target)
+    if layout is not None:
+        board = layout.geometry
+        if cut_share is None:
+            cut_share = 0.0 if isinstance(target, CheckerboardTarget) else DEFAULT_CUT_SHARE
     check_output_dir(out_dir, force=force)
     poses = sample_board_poses(profile, board, views=views, seed=seed)
+    cut: list[bool] = [False] * len(poses)
+    if layout is not None and target is not None and cut_share:
+        poses, cut = cut_views(profile, poses, layout.corners_grid(target), share=cut_share, seed=seed)
     out = clear_numbered(out_dir, ("left", "right"), force=force)
     names = numbered_names(views)
     left_setup, right_setup = stereo_setups(profile, supersample=supersample)
     with tempfile.TemporaryDirectory(prefix="s2r-boards-") as tmp:
-        mesh, texture = board_surface(Path(tmp), board)
+        mesh, texture = board_surface(Path(tmp), board, layout)
         jobs_list = [
             StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k)
             for k, T in enumerate(poses)
@@ -135,5 +157,8 @@ def render_board_set(
         left_paths.append(encode_png(out / "left" / f"{name}.png", left))
         right_paths.append(encode_png(out / "right" / f"{name}.png", right))
     options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain}
-    truth_path = atomic_write_text(out / "truth.yaml", _truth(profile, board, names, poses, options), force=True)
+    if layout is not None:
+        poses = [T @ layout.T_grid_target for T in poses]  # the truth in the target's own frame
+    truth_path = atomic_write_text(out / "truth.yaml", _truth(profile, board, names, poses, options, target, cut),
+                                   force=True)
     return BoardSet(out, left_paths, right_paths, truth_path, [np.asarray(T) for T in poses])
