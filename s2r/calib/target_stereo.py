@@ -123,8 +123,8 @@ def _stereo_rounds(views: list[PairView], fit_l: MonoFit, fit_r: MonoFit, size: 
 
 
 def _mono_fits(obs_l: list[Observation | None], obs_r: list[Observation | None], size: tuple[int, int], *,
-               lens: str, distortion: str, max_error_px: float | None, dropped: list[DroppedView]
-               ) -> tuple[list[MonoFit], list[dict[int, int]]]:
+               lens: str, distortion: str, max_error_px: float | None, dropped: list[DroppedView],
+               prune: bool = True) -> tuple[list[MonoFit], list[dict[int, int]]]:
     """Each camera on every view it saw (outlier views and corners removed, written back into ``obs_*``);
     returns the fits and, per camera, view index -> position in the fit's kept views."""
     fits, keeps = [], []
@@ -132,7 +132,7 @@ def _mono_fits(obs_l: list[Observation | None], obs_r: list[Observation | None],
         index = [k for k, o in enumerate(obs) if o is not None]
         if len(index) < MIN_VIEWS:
             raise too_few_error(len(index), dropped, what=f"{side} images")
-        fit = fit_camera(CameraViews([obs[k] for k in index], size, lens, distortion),  # type: ignore[misc]
+        fit = fit_camera(CameraViews([obs[k] for k in index], size, lens, distortion, prune),  # type: ignore[misc]
                          max_error_px=max_error_px, camera=side)
         for j, k in enumerate(index):
             obs[k] = fit.views[j]
@@ -160,7 +160,8 @@ def calibrate_stereo_target_detections(
     dropped = [*extra_dropped, *_skipped([dl for _, dl, _ in pairs], obs_l),
                *_skipped([dr for _, _, dr in pairs], obs_r)]
     (fit_l, fit_r), keeps = _mono_fits(obs_l, obs_r, size, lens=lens, distortion=distortion,
-                                       max_error_px=max_error_px, dropped=dropped)
+                                       max_error_px=max_error_px, dropped=dropped,
+                                       prune=not isinstance(target, CheckerboardTarget))
     views, reordered = pair_views(names, obs_l, obs_r, keeps[0], keeps[1], target)
     if len(views) < MIN_VIEWS:
         raise too_few_error(len(views), dropped)
@@ -390,7 +391,8 @@ def calibrate_mono_target(
     if len(index) < MIN_VIEWS:
         raise too_few_error(len(index), skipped, what="images")
     views = [o for o in obs if o is not None]
-    fit = fit_camera(CameraViews(views, size, lens, distortion), max_error_px=max_error_px, camera="the")
+    fit = fit_camera(CameraViews(views, size, lens, distortion, not isinstance(target, CheckerboardTarget)),
+                     max_error_px=max_error_px, camera="the")
     used = [views[i] for i in fit.keep]
     cov = coverage_of([v.img for v in views], size)
     spread = centred_spread(fit.solution, used, target, size)
