@@ -61,7 +61,7 @@ def _errors(rig: Rig, cams: list[tuple[float, float, float, float]], baseline: f
 
 def run_s2r(rig: Rig, distortion: str, **kw: Any) -> Row:
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="bench",
-                                      distortion=distortion, max_error_px=None, sources=[], **kw)
+                                      distortion=distortion, max_error_px=None, sources=[], compare=False, **kw)
     p = res.profile
     cams = [(c.fx_px, c.fy_px, c.cx_px, c.cy_px) for c in (p.left, p.right)]
     stds = [(c.std.fx_px, c.std.fy_px, c.std.cx_px, c.std.cy_px) for c in (p.left, p.right)  # type: ignore[union-attr]

@@ -13,6 +13,8 @@ Timings on a shared machine are disturbed by other load: compare the ratios, mea
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -22,7 +24,7 @@ from pathlib import Path
 
 #: The installed console script (what a user types), else the module.
 _SCRIPT = Path(sys.executable).with_name("s2r")
-S2R = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "s2r.cli"]
+S2R = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "s2r"]
 ANCHOR = [sys.executable, "-c", "import numpy, yaml, pydantic"]
 
 
@@ -34,16 +36,25 @@ def commands(tmp: Path) -> dict[str, list[str]]:
         "s2r --version": [*S2R, "--version"],
         "s2r profile list": [*S2R, "profile", "list"],
         "s2r profile show realsense_d435_848x480": [*S2R, "profile", "show", "realsense_d435_848x480"],
-        "s2r profile convert ... --to ros": [*S2R, "profile", "convert", "realsense_d435_848x480", "--to", "ros",
-                                             "-o", str(tmp / "ros"), "--force"],
+        "s2r profile convert ... --to kalibr": [*S2R, "profile", "convert", "realsense_d435_848x480", "--to",
+                                                "kalibr", "-o", str(tmp / "camchain.yaml"), "--force"],
+        # ROS camera_info holds the rectification (R1, P1): OpenCV's stereoRectify, so cv2 loads
+        "s2r profile convert ... --to ros (OpenCV)": [*S2R, "profile", "convert", "realsense_d435_848x480", "--to",
+                                                      "ros", "-o", str(tmp / "ros"), "--force"],
     }
 
 
-def time_once(argv: list[str]) -> float:
-    """Wall-clock seconds of one run; raises when the command fails."""
+def time_once(argv: list[str]) -> tuple[float, float]:
+    """``(wall-clock, CPU user + system)`` seconds of one run; raises when the command fails.
+
+    The CPU figure is less disturbed than the wall clock when other processes load the machine.
+    """
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> int:
@@ -54,15 +65,18 @@ def main() -> int:
         cmds = commands(Path(tmp))
         for argv in cmds.values():  # warm the file cache and the .pyc files
             time_once(argv)
-        times: dict[str, list[float]] = {label: [] for label in cmds}
+        times: dict[str, list[tuple[float, float]]] = {label: [] for label in cmds}
         for _ in range(args.runs):
             for label, argv in cmds.items():
                 times[label].append(time_once(argv))
-    anchor = statistics.median(next(iter(times.values())))
-    print(f"{'command':<44}{'median (s)':>11}{'min (s)':>9}{'x anchor':>10}  (median of {args.runs} runs)")
+    first = next(iter(times.values()))
+    wall0, cpu0 = statistics.median(w for w, _ in first), statistics.median(c for _, c in first)
+    print(f"load average before the runs: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print(f"{'command':<44}{'wall median (s)':>16}{'x anchor':>9}{'CPU median (s)':>16}{'x anchor':>9}"
+          f"   (median of {args.runs} runs)")
     for label, values in times.items():
-        med = statistics.median(values)
-        print(f"{label:<44}{med:>11.3f}{min(values):>9.3f}{med / anchor:>10.2f}")
+        wall, cpu = statistics.median(w for w, _ in values), statistics.median(c for _, c in values)
+        print(f"{label:<44}{wall:>16.3f}{wall / wall0:>9.2f}{cpu:>16.3f}{cpu / cpu0:>9.2f}")
     return 0
 
 

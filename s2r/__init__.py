@@ -11,6 +11,7 @@ One typed :class:`StereoProfile` (YAML on disk) drives one rectification + match
 
 from __future__ import annotations
 
+import importlib
 from typing import TYPE_CHECKING, Any
 
 from s2r._version import __version__
@@ -25,12 +26,21 @@ from s2r.errors import (
     SourceError,
     ValidateError,
 )
-from s2r.formats.s2r_yaml import dump_profile
-from s2r.profile import Camera, Distortion, Extrinsics, MatcherSettings, MonoProfile, Provenance, StereoProfile
-from s2r.registry import list_profiles, load_profile
 
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
+    from s2r.formats.s2r_yaml import dump_profile
+    from s2r.profile import Camera, Distortion, Extrinsics, MatcherSettings, MonoProfile, Provenance, StereoProfile
+    from s2r.registry import list_profiles, load_profile
+
+#: Public names loaded on first use (PEP 562), so `import s2r` and the CLI start without pydantic's model
+#: building or OpenCV: name -> module.
+_LAZY = {
+    **dict.fromkeys(("Camera", "Distortion", "Extrinsics", "MatcherSettings", "MonoProfile", "Provenance",
+                     "StereoProfile"), "s2r.profile"),
+    "dump_profile": "s2r.formats.s2r_yaml", "list_profiles": "s2r.registry", "load_profile": "s2r.registry",
+    "StereoPipeline": "s2r.depth.pipeline",
+}
 
 __all__ = [
     "CalibrationError",
@@ -58,9 +68,13 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    # StereoPipeline pulls in OpenCV; load it on first use so `import s2r` and the CLI start fast.
-    if name == "StereoPipeline":
-        from s2r.depth.pipeline import StereoPipeline
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 's2r' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
 
-        return StereoPipeline
-    raise AttributeError(f"module 's2r' has no attribute {name!r}")
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -4,6 +4,12 @@ All models are frozen pydantic models with ``extra="forbid"`` and reject NaN/inf
 field names: ``_px`` pixels, ``_m`` metres, ``_rad`` radians, ``_hz`` hertz. Pixel coordinates follow
 OpenCV's convention (0-based, pixel centres at integers) unless ``provenance.convention`` says otherwise.
 
+Physical bounds (each refusal says why): image sides 16..16384 px (:data:`MAX_IMAGE_PX`); a field of view
+between 0.5 deg and 170 deg for a pinhole, up to 280 deg for the equidistant (fisheye) model; ``|skew| <= fx``;
+distortion coefficients ``|k| <= 1000`` and tangential ``|p| <= 1``; baseline 1 mm..10 m; the right camera
+turned at most 90 deg from the left; ``provenance.convention`` one of :data:`CENTRE_OFFSET_PX`. Numbers must
+be numbers: ``"500"`` (a string) or ``true`` is refused where a number is expected.
+
 Extrinsics use OpenCV's stereo convention: ``X_right = R @ X_left + T`` with points in the LEFT optical
 frame, ``T`` in metres. A right camera 0.1 m to the right of the left one has ``T = (-0.1, 0, 0)``.
 """
@@ -12,11 +18,12 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-from typing import Any, Literal
+import types
+from typing import Any, Literal, Union, get_args, get_origin
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from s2r._version import __version__
 from s2r.geometry import ORTHONORMAL_TOL, check_rotation, rotation_angle_rad
@@ -25,6 +32,10 @@ __all__ = [
     "CENTRE_OFFSET_PX",
     "DEFAULT_SUBPIXEL_PX",
     "DISTORTION_COEFFICIENTS",
+    "MAX_BASELINE_M",
+    "MAX_IMAGE_PX",
+    "MIN_BASELINE_M",
+    "MIN_IMAGE_PX",
     "SCHEMA_VERSION",
     "CalibrationQuality",
     "Camera",
@@ -51,13 +62,61 @@ DISTORTION_COEFFICIENTS: dict[str, int] = {"plumb_bob": 5, "rational_polynomial"
 #: publishes (W + 1) / 2, gz-sim W / 2.
 CENTRE_OFFSET_PX: dict[str, float] = {"gazebo-classic": 1.0, "gz-sim": 0.5, "exact": 0.0, "opencv": 0.0}
 
+#: Image side bounds, pixels. 16384 is above the largest sensors used for stereo (about 14000 px) and keeps the
+#: float32 rectification maps under 2 GiB; below 16 px no block matcher (5..21 px blocks) has room to work.
+MIN_IMAGE_PX, MAX_IMAGE_PX = 16, 16384
+#: Field-of-view bounds, degrees: a pinhole cannot image 180 deg (170 is about its useful limit; wider lenses
+#: use the equidistant model, up to 280 deg); 0.5 deg is narrower than a 1000 mm telephoto.
+MIN_FOV_DEG, MAX_PINHOLE_FOV_DEG, MAX_FISHEYE_FOV_DEG = 0.5, 170.0, 280.0
+#: Distortion coefficient bounds: rational-polynomial fits reach tens to hundreds (numerator and denominator
+#: nearly cancel); beyond 1000 the model is numerically meaningless. Tangential terms are fractions of a focal
+#: length.
+MAX_DISTORTION_COEFF, MAX_TANGENTIAL_COEFF = 1000.0, 1.0
+#: Baseline bounds, metres: 1 mm is below the smallest stereo endoscopes; above 10 m a "baseline" is almost
+#: always a T written in millimetres or in chessboard squares (pass ``--units-m``).
+MIN_BASELINE_M, MAX_BASELINE_M = 1e-3, 10.0
+#: Largest angle between the two cameras' orientations, degrees: beyond 90 deg the views barely overlap and
+#: rectification has no common image plane (a camera turned 180 deg looks the other way).
+MAX_STEREO_ROTATION_DEG = 90.0
+
 DistortionModel = Literal["plumb_bob", "rational_polynomial", "equidistant"]
+Convention = Literal["gazebo-classic", "gz-sim", "exact", "opencv"]
 Origin = Literal["sim", "real", "nominal"]
 Algorithm = Literal["sgbm", "sgbm_3way", "hh", "hh4", "bm"]
 
 
+def _numeric(annotation: Any) -> bool:
+    """True when a field's type is a number, an optional number, or a tuple of numbers."""
+    if annotation in (int, float):
+        return True
+    args = [a for a in get_args(annotation) if a is not type(None) and a is not Ellipsis]
+    origin = get_origin(annotation)
+    if origin in (Union, types.UnionType):
+        return bool(args) and all(_numeric(a) for a in args)
+    return origin is tuple and bool(args) and all(_numeric(a) for a in args)
+
+
+def _non_number(value: Any) -> Any:
+    """The first string or bool inside ``value`` (a scalar or nested lists), or None."""
+    if isinstance(value, (str, bytes, bool)):
+        return value
+    if isinstance(value, (list, tuple)):
+        return next((found for v in value if (found := _non_number(v)) is not None), None)
+    return None
+
+
 class _Model(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False, validate_default=True)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _numbers_are_numbers(cls, value: Any, info: ValidationInfo) -> Any:
+        field = cls.model_fields.get(info.field_name or "")
+        if field is not None and _numeric(field.annotation):
+            found = _non_number(value)
+            if found is not None:
+                raise ValueError(f"expected a number, got {found!r}: write numbers without quotes")
+        return value
 
 
 class Distortion(_Model):
@@ -74,6 +133,13 @@ class Distortion(_Model):
             raise ValueError(
                 f"distortion model {self.model} needs {expected} coefficients, got {len(self.coefficients)}"
             )
+        tangential = (2, 3) if self.model != "equidistant" else ()
+        for i, c in enumerate(self.coefficients):
+            bound = MAX_TANGENTIAL_COEFF if i in tangential else MAX_DISTORTION_COEFF
+            if abs(c) > bound:
+                kind = "tangential coefficient" if i in tangential else "coefficient"
+                raise ValueError(f"distortion {kind} {i} = {c:g} exceeds {bound:g} in magnitude: no lens model "
+                                 "fit is that large (wrong units or a corrupted file?)")
         return self
 
     @property
@@ -95,8 +161,8 @@ class CameraUncertainty(_Model):
 class Camera(_Model):
     """One pinhole camera: image size, intrinsics (pixels), distortion, frame name."""
 
-    width_px: int = Field(gt=0)
-    height_px: int = Field(gt=0)
+    width_px: int = Field(ge=MIN_IMAGE_PX, le=MAX_IMAGE_PX)
+    height_px: int = Field(ge=MIN_IMAGE_PX, le=MAX_IMAGE_PX)
     fx_px: float
     fy_px: float
     cx_px: float
@@ -112,6 +178,25 @@ class Camera(_Model):
         if value <= 0:
             raise ValueError(f"focal length must be positive, got {value}")
         return value
+
+    @model_validator(mode="after")
+    def _physical(self) -> Camera:
+        fisheye = self.distortion.model == "equidistant"
+        for axis, focal, size in (("x", self.fx_px, self.width_px), ("y", self.fy_px, self.height_px)):
+            half = size / 2.0
+            fov = 2.0 * math.degrees(half / focal if fisheye else math.atan(half / focal))
+            widest = MAX_FISHEYE_FOV_DEG if fisheye else MAX_PINHOLE_FOV_DEG
+            if fov > widest:
+                model = "an equidistant (fisheye)" if fisheye else "a pinhole"
+                raise ValueError(f"f{axis} = {focal:g} px gives a {fov:.1f} deg field of view over {size} px, wider "
+                                 f"than {model} camera can image ({widest:g} deg); is f{axis} in pixels?")
+            if fov < MIN_FOV_DEG:
+                raise ValueError(f"f{axis} = {focal:g} px gives a {fov:.3g} deg field of view over {size} px, "
+                                 f"narrower than any real lens ({MIN_FOV_DEG:g} deg); is f{axis} in pixels?")
+        if abs(self.skew) > self.fx_px:
+            raise ValueError(f"skew {self.skew:g} exceeds fx ({self.fx_px:g}): pixel axes tilted over 45 deg exist "
+                             "in no camera (OpenCV and ROS calibrations give 0)")
+        return self
 
     @model_validator(mode="after")
     def _principal_point_inside(self) -> Camera:
@@ -187,8 +272,20 @@ class Extrinsics(_Model):
     @model_validator(mode="after")
     def _valid_rigid_motion(self) -> Extrinsics:
         check_rotation(self.rotation, name="rotation", tol=ORTHONORMAL_TOL)
-        if float(np.linalg.norm(self.translation_m)) < 1e-6:
+        if max(abs(t) for t in self.translation_m) > MAX_BASELINE_M:
+            raise ValueError(f"translation_m {self.translation_m} exceeds {MAX_BASELINE_M:g} m: stereo baselines "
+                             "are millimetres to metres (is T in millimetres or in chessboard squares?)")
+        baseline = math.hypot(*self.translation_m)
+        if baseline < 1e-6:
             raise ValueError("baseline is zero: translation_m must separate the two cameras")
+        if not MIN_BASELINE_M <= baseline <= MAX_BASELINE_M:
+            raise ValueError(f"baseline {baseline:g} m is outside {MIN_BASELINE_M:g}..{MAX_BASELINE_M:g} m: stereo "
+                             "baselines are millimetres to metres (is T in other units?)")
+        angle = math.degrees(rotation_angle_rad(np.asarray(self.rotation, dtype=np.float64)))
+        if angle > MAX_STEREO_ROTATION_DEG:
+            raise ValueError(f"the right camera is turned {angle:.1f} deg from the left (more than "
+                             f"{MAX_STEREO_ROTATION_DEG:g}): the two views do not overlap enough for stereo "
+                             "(is R inverted, or the pair's frames mixed up?)")
         return self
 
 
@@ -200,7 +297,7 @@ class MatcherSettings(_Model):
 
     algorithm: Algorithm = "sgbm"
     min_disparity: int = 0
-    num_disparities: int | None = Field(default=None, gt=0)
+    num_disparities: int | None = Field(default=None, gt=0, le=MAX_IMAGE_PX)
     block_size: int = Field(default=5, ge=1, le=255)
     p1: int | None = Field(default=None, ge=0)
     p2: int | None = Field(default=None, ge=0)
@@ -286,7 +383,7 @@ class Provenance(_Model):
 
     origin: Origin
     method: str
-    convention: str = "opencv"
+    convention: Convention = "opencv"
     sources: tuple[SourceFile, ...] = ()
     tool_version: str = __version__
     created: str = Field(default_factory=lambda: _dt.date.today().isoformat())

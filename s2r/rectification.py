@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.errors import S2RError
 from s2r.profile import StereoProfile
 
 __all__ = ["StereoRectification", "stereo_rectification"]
@@ -72,6 +73,8 @@ def stereo_rectification(
         alpha: 0 keeps only valid pixels, 1 keeps every source pixel (black borders), as OpenCV.
         image_size: ``(width, height)`` of the rectified images; default the profile's.
     """
+    if not (0.0 <= alpha <= 1.0 or alpha == -1.0):  # NaN fails both
+        raise S2RError(f"rectification alpha must be in [0, 1] or -1, got {alpha}", field="alpha")
     size = profile.image_size
     out_size = size if image_size is None else image_size
     roi1: Any

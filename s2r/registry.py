@@ -9,10 +9,12 @@ import difflib
 import os
 from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from s2r.errors import ProfileError
-from s2r.formats.detect import load_any
-from s2r.profile import StereoProfile
+
+if TYPE_CHECKING:  # listing and resolving names needs neither the formats nor the profile models
+    from s2r.profile import StereoProfile
 
 __all__ = ["PROFILE_ENV", "PROFILE_PATH_ENV", "SHIPPED_PROFILES", "did_you_mean", "list_profiles", "load_profile",
            "resolve_profile"]
@@ -89,4 +91,6 @@ def load_profile(name_or_path: str | Path | None = None) -> StereoProfile:
     A path may be any format :func:`s2r.formats.detect.load_any` reads from one file (s2r YAML, Kalibr,
     OpenCV FileStorage with R and T, rs-enumerate-devices text, a folder with ROS left.yaml/right.yaml).
     """
+    from s2r.formats.detect import load_any
+
     return load_any(resolve_profile(name_or_path))

@@ -14,7 +14,7 @@ LAYERS: dict[str, int] = {
     "_version": 0, "errors": 0, "progress": 0,
     "fileio": 1, "geometry": 1,  # fileio and geometry do not import each other
     "profile": 2, "targets": 2,
-    "rectification": 3,
+    "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,
     "registry": 5, "htmlreport": 5,
     "calib": 6, "depth": 6, "render": 6,
@@ -22,7 +22,8 @@ LAYERS: dict[str, int] = {
     "validate": 8,
     "cli": 9, "__main__": 10, "__init__": 10,
 }
-CV2_HOMES = {"calib", "depth", "render", "rectification", "formats.opencv", "formats.ros", "validate", "quality"}
+CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
+             "quality"}
 PYBULLET_HOMES = {"render"}
 
 

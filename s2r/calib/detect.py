@@ -16,10 +16,16 @@ over the pattern's ``(cols, rows)`` inner corners.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import hashlib
 import json
 import math
 import multiprocessing as mp
+import os
+import signal
+import sys
+import threading
+import time
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -33,6 +39,7 @@ from numpy.typing import NDArray
 
 from s2r.errors import S2RError
 from s2r.fileio import atomic_write_text
+from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
 
 if TYPE_CHECKING:
@@ -164,9 +171,9 @@ def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Cor
 def _detect_item(item: DetectItem, pattern: tuple[int, int], target: AnyTarget | None = None) -> Detection:
     """Worker: read (if a path), detect (``target`` when given, else the ``pattern`` chessboard), describe."""
     if isinstance(item.source, Path):
-        gray = cv2.imread(str(item.source), cv2.IMREAD_GRAYSCALE)
+        gray, reason = decode_image_file(item.source, cv2.IMREAD_GRAYSCALE)
         if gray is None:
-            return Detection(item.name, item.sha256, "unreadable", detail="not a readable image (corrupt or empty)")
+            return Detection(item.name, item.sha256, "unreadable", detail=f"not a readable image: {reason}")
     else:
         gray = item.source
     size = (int(gray.shape[1]), int(gray.shape[0]))
@@ -196,6 +203,19 @@ class CornerCache:
         self.folder = Path(folder)
         self.target_key = "" if target is None else hashlib.sha256(
             target.model_dump_json().encode()).hexdigest()[:16]
+        self.remove_stale_temporaries()
+
+    def remove_stale_temporaries(self, max_age_s: float = 60.0) -> int:
+        """Delete half-written ``.*.tmp`` files older than ``max_age_s`` (left by a killed run); their count."""
+        removed = 0
+        now = time.time()
+        with contextlib.suppress(OSError):
+            for tmp in self.folder.glob(".*.tmp"):
+                with contextlib.suppress(OSError):
+                    if now - tmp.lstat().st_mtime > max_age_s:
+                        tmp.unlink()
+                        removed += 1
+        return removed
 
     def _file(self, sha256: str, pattern: tuple[int, int]) -> Path:
         board = f"t{self.target_key}" if self.target_key else f"{pattern[0]}x{pattern[1]}"
@@ -226,12 +246,38 @@ class CornerCache:
             atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True)
 
 
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+_WATCHDOG_PERIOD_S = 1.0
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Pool initializer: end this worker when the parent process dies, even by ``kill -9``.
+
+    On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
+    thread also watches the parent pid once a second and exits when the worker was re-parented.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(_WATCHDOG_PERIOD_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
+
+
 def _executor(jobs: int) -> ProcessPoolExecutor:
     # fork: workers start instantly with cv2 loaded and never re-import the caller's __main__ (scripts
     # without a main guard keep working); spawn where fork does not exist. Never call cv2.setNumThreads in a
     # forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
+                               initargs=(os.getpid(),))
 
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,

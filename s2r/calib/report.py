@@ -1,8 +1,10 @@
 """``s2r calibrate --report``: a self-contained HTML page of a calibration (figures embedded).
 
-Sections: summary and warnings, the parameter table with standard deviations, the per-view error bar
-chart (dropped views marked), the coverage heat map of each camera, one detection overlay, and a
-rectified pair with horizontal lines to judge the epipolar alignment.
+Stereo sections: the verdict (good / check / poor with its reasons), summary and warnings, the parameter
+table with standard deviations and the signed translation, the lens model comparison (held-out error),
+per-view errors (bar chart, a thumbnail of every view with its error, a table of every view), per-corner
+residual vectors and the board poses in 3D, coverage footprints with pixel axes, one detection overlay
+and a rectified pair with horizontal lines to judge the epipolar alignment.
 """
 
 from __future__ import annotations
@@ -19,9 +21,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.coverage import Coverage
 from s2r.calib.mono import MonoCalibration
+from s2r.calib.report_plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
 from s2r.calib.stereo import StereoCalibration
+from s2r.calib.synth import board_object_points
 from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, image_to_data_uri, write_report
 from s2r.profile import Camera
 from s2r.rectification import stereo_rectification
@@ -66,17 +69,6 @@ def _error_chart(names: list[str], series: dict[str, list[float]], used: list[bo
                   rotation=70, fontsize=7)
     ax.set_ylabel("RMS reprojection error (px)")
     ax.legend(fontsize=8)
-    return figure_to_data_uri(fig)
-
-
-def _coverage_map(coverages: dict[str, Coverage]) -> str:
-    fig, axes = plt.subplots(1, len(coverages), figsize=(4.2 * len(coverages), 3.2), squeeze=False)
-    for ax, (label, cov) in zip(axes[0], coverages.items(), strict=True):
-        im = ax.imshow(cov.counts, cmap="viridis", interpolation="nearest")
-        ax.set_title(f"{label}: {100 * cov.fraction:.0f} % of cells covered")
-        ax.set_xticks([])
-        ax.set_yticks([])
-        fig.colorbar(im, ax=ax, label="corners")
     return figure_to_data_uri(fig)
 
 
@@ -126,38 +118,95 @@ def _dropped_table(result: StereoCalibration | MonoCalibration) -> str:
                       [[d.name, d.rms_px, d.reason] for d in result.dropped])
 
 
+_BANNER = {"good": "pass", "check": "warn", "poor": "fail"}
+
+
+def _verdict_section(result: StereoCalibration) -> ReportSection:
+    v = result.verdict
+    if v is None:
+        return ReportSection("Verdict", paragraphs=["no verdict (computed by calibrate_stereo)"])
+    items = "".join(f"<li><b>{r.level}</b>: {html.escape(r.text)}</li>" for r in v.reasons)
+    return ReportSection("Verdict", banner=(_BANNER[v.level], f"{v.level.upper()}"), paragraphs=[f"<ul>{items}</ul>"])
+
+
+def _extrinsic_rows(result: StereoCalibration) -> list[list[Any]]:
+    p = result.profile
+    sol = result.solution
+    centre = -p.R.T @ p.T
+    rows: list[list[Any]] = [[f"T{axis} (mm, signed)", f"{1000 * v:+.3f}", None, ""]
+                             for axis, v in zip("xyz", p.T, strict=True)]
+    side = "right of" if centre[0] > 0 else "LEFT of"
+    rows.append(["right camera centre (mm, left frame)", ", ".join(f"{1000 * v:+.2f}" for v in centre), None,
+                 f"{side} the left camera"])
+    b_std = p.extrinsics.baseline_std_m
+    rows.append(["baseline_m", p.baseline_m, b_std, "" if not b_std else f"{100 * b_std / p.baseline_m:.3g} %"])
+    r_std = None if sol is None or not np.isfinite(sol.rotation_std_deg) else sol.rotation_std_deg
+    rows.append(["rotation_deg", float(np.degrees(p.rotation_angle_rad)), r_std, ""])
+    return rows
+
+
+def _models_table(result: StereoCalibration) -> str:
+    if result.models is None:
+        return "<p class='note'>model comparison not computed</p>"
+    rows = [[s.model + (" (used)" if s.chosen else ""), s.heldout_px, " ".join(f"{f:.3f}" for f in s.folds_px),
+             "best" if s.model == result.models.best else ""] for s in result.models.scores]
+    return html_table(["lens model (--distortion)", "held-out RMS (px)", "per fold (px)", ""], rows,
+                      caption="held-out reprojection error: views left out of the fit, each model", left=[0, 2])
+
+
+def _views_table(result: StereoCalibration) -> str:
+    rows = [[v.name, v.left_px, v.right_px, v.stereo_px, "used" if v.used else v.reason] for v in result.views]
+    rows += [[d.name, None, None, d.rms_px, d.reason] for d in result.dropped
+             if not d.reason.startswith("outlier")]
+    return html_table(["view", "left RMS (px)", "right RMS (px)", "both (px)", "status"], rows,
+                      caption="every view: used, dropped as outlier, or skipped", left=[0, 4])
+
+
 def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
     p = result.profile
     q = p.provenance.calibration
     assert q is not None
-    rows = _camera_rows("left", p.left) + _camera_rows("right", p.right)
-    rows.append(["baseline_m", p.baseline_m, p.extrinsics.baseline_std_m, ""])
-    rows.append(["rotation_deg", float(np.degrees(p.rotation_angle_rad)), None, ""])
+    size = p.image_size
+    rows = _camera_rows("left", p.left) + _camera_rows("right", p.right) + _extrinsic_rows(result)
     summary = ReportSection("Summary", paragraphs=[html.escape(
-        f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS left {q.rms_left_px:.3f} px, "
-        f"right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; epipolar RMS after rectification "
-        f"{result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm.")]
+        f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; lens model {q.distortion_terms}; "
+        f"RMS left {q.rms_left_px:.3f} px, right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; "
+        f"epipolar RMS after rectification {result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm. "
+        "Convention: X_right = R X_left + T (metres).")]
         + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
         tables=[html_table(["parameter", "value", "std", "relative std"], rows)])
+    models = ReportSection("Lens model comparison", tables=[_models_table(result)])
     views = list(result.views)
     chart = _error_chart([v.name for v in views], {"left": [v.left_px for v in views],
                                                    "right": [v.right_px for v in views],
                                                    "stereo": [v.stereo_px for v in views]},
                          [v.used for v in views], result.threshold_px)
-    errors = ReportSection("Per-view errors", images=[("per-view RMS; hatched red = dropped as outlier", chart)],
-                           tables=[_dropped_table(result)])
-    coverage = ReportSection("Coverage", paragraphs=[html.escape(
+    corners = dict(zip(result.used_names, result.corners_left, strict=True))
+    strip = thumbnail_strip([(v.name, corners.get(v.name), f"L {v.left_px:.2f} R {v.right_px:.2f} px"
+                              + ("" if v.used else " dropped"), v.used) for v in views],
+                            result.view_paths, size)
+    errors = ReportSection("Per-view errors", images=[("per-view RMS; hatched red = dropped as outlier", chart),
+                                                      ("every view (left image) with its error", strip)],
+                           tables=[_views_table(result)])
+    sections = [_verdict_section(result), summary, models, errors]
+    if result.solution is not None:
+        sol = result.solution
+        sections.append(ReportSection("Residuals and board poses", images=[
+            ("per-corner residual vectors over the image (magnified)", residual_vectors(
+                {"left": result.corners_left, "right": result.corners_right},
+                {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
+            ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
+                                                 board_object_points(q.pattern, q.square_m), p.R, p.T))]))
+    sections.append(ReportSection("Coverage", paragraphs=[html.escape(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
         f"{100 * result.spread.size_fraction[0]:.0f}-{100 * result.spread.size_fraction[1]:.0f} % of the image")],
-        images=[("corners per image cell", _coverage_map({"left": result.coverage_left,
-                                                          "right": result.coverage_right}))])
-    sections = [summary, errors, coverage]
+        images=[("views whose board covers each part of the image", coverage_maps(
+            {"left": result.coverage_left, "right": result.coverage_right}, size))]))
     sample = _sample(result)
     if sample is not None and sample[1] is not None:
         sections.append(ReportSection("Detection and rectification", images=[
-            ("detected corners (first used left image)",
-             _overlay(sample[0], result.corners_left[0], p.provenance.calibration.pattern)),  # type: ignore[union-attr]
+            ("detected corners (first used left image)", _overlay(sample[0], result.corners_left[0], q.pattern)),
             ("rectified pair with horizontal lines", _rectified_pair(result, sample[0], sample[1]))]))
     return sections
 
@@ -176,7 +225,8 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     sections = [summary, ReportSection("Per-view errors", images=[
         ("per-view RMS", _error_chart(names, {"camera": errs}, used, result.threshold_px))],
         tables=[_dropped_table(result)]),
-        ReportSection("Coverage", images=[("corners per image cell", _coverage_map({"camera": result.coverage}))])]
+        ReportSection("Coverage", images=[("views whose board covers each part of the image", coverage_maps(
+            {"camera": result.coverage}, result.profile.camera.image_size))])]
     sample = _sample(result)
     if sample is not None:
         sections.append(ReportSection("Detection", images=[

@@ -16,8 +16,10 @@ from numpy.typing import NDArray
 from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.lens import DEFAULT_LENS, lens_model
+from s2r.calib.models import ModelComparison, compare_models
 from s2r.calib.pair import PairSolution, solve_pair
 from s2r.calib.synth import board_object_points
+from s2r.calib.verdict import Verdict, stereo_verdict
 from s2r.calib.views import (
     MIN_VIEWS,
     check_sizes,
@@ -88,12 +90,16 @@ class StereoCalibration:
     sample_images: tuple[NDArray[np.uint8], NDArray[np.uint8]] | None = field(default=None, repr=False)
     detection_cached: int = 0
     solution: PairSolution | None = field(default=None, repr=False)
+    models: ModelComparison | None = None
+    verdict: Verdict | None = None
+    view_paths: dict[str, tuple[Path, Path]] = field(default_factory=dict, repr=False)
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
         p = self.profile
         quality = p.provenance.calibration
         return {
+            "verdict": None if self.verdict is None else self.verdict.as_dict(),
             "profile": p.name,
             "left": _camera_figures(p.left), "right": _camera_figures(p.right),
             "translation_m": list(p.extrinsics.translation_m), "baseline_m": p.baseline_m,
@@ -108,6 +114,10 @@ class StereoCalibration:
             "reordered_right_corners": list(self.reordered),
             "warnings": list(self.warnings),
             "detections_from_cache": self.detection_cached,
+            "rotation_std_deg": None if self.solution is None or not np.isfinite(self.solution.rotation_std_deg)
+            else self.solution.rotation_std_deg,
+            "unobservable": [] if self.solution is None else list(self.solution.unobservable),
+            "model_comparison": None if self.models is None else self.models.as_dict(),
         }
 
 
@@ -171,7 +181,7 @@ def calibrate_stereo_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, pattern: tuple[int, int], square_m: float, name: str,
     distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
     swap: bool = False, sources: Sequence[SourceFile] = (), extra_dropped: Sequence[DroppedView] = (),
-    sample_paths: tuple[Path, Path] | None = None,
+    sample_paths: tuple[Path, Path] | None = None, compare: bool = True,
 ) -> StereoCalibration:
     """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`."""
     if swap:
@@ -207,10 +217,18 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
+    models = compare_models(pl, pr, obj, size, chosen=distortion) if compare else None
+    warnings = [*([models.warning] if models is not None and models.warning else []),
+                *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
+    heldout = None if models is None else next(m.heldout_px for m in models.scores if m.chosen)
+    verdict = stereo_verdict(
+        rms_px=sol.rms_px, heldout_px=heldout, epipolar_px=float("nan") if epi is None else epi,
+        baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
+        coverage=(cov_l.fraction, cov_r.fraction), model_warning=None if models is None else models.warning,
+        unobservable=sol.unobservable, mismatched=len(sol.mismatched))
     view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
                    for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(
@@ -219,7 +237,8 @@ def calibrate_stereo_detections(
         epipolar_rms_px=float("nan") if epi is None else epi, warnings=tuple(warnings),
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
-        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol)
+        detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
+        verdict=verdict)
 
 
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
@@ -269,7 +288,7 @@ def calibrate_stereo(
     square_m: float = 0.025, name: str = "calibrated", distortion: str = DEFAULT_LENS,
     max_error_px: float | None = None, fix_intrinsics: bool = False, swap: bool = False, jobs: int | None = None,
     cache_dir: Path | None = None, progress: ProgressCallback | None = None, names: Sequence[str] | None = None,
-    unpaired: Sequence[Path] = (),
+    unpaired: Sequence[Path] = (), compare: bool = True,
 ) -> StereoCalibration:
     """Calibrate a stereo pair from chessboard image files (``left_paths[i]`` pairs with ``right_paths[i]``).
 
@@ -279,6 +298,7 @@ def calibrate_stereo(
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
         fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
         swap: exchange the left and right images (when the check finds the right camera to the left).
+        compare: score every lens model on held-out views (:func:`s2r.calib.models.compare_models`).
         jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
         names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
 
@@ -304,8 +324,9 @@ def calibrate_stereo(
     report(progress, 0, 1, "solving")
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra)
+        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare)
     report(progress, 1, 1, "solving")
     first = result.used_names[0]
     idx = [n for n, _, _ in pairs].index(first)
-    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])))
+    view_paths = {n: (Path(a), Path(b)) for (n, _, _), a, b in zip(pairs, left_paths, right_paths, strict=True)}
+    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])), view_paths=view_paths)

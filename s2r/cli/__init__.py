@@ -87,9 +87,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _report(exc: Exception) -> int:
     """Print ``exc`` as one ``error:`` line; its exit code (2 for bad input, 3 for a bug in s2r)."""
+    from pydantic import ValidationError  # only on the error path: keeps `s2r --help` fast
+
     try:
         if isinstance(exc, S2RError):
             print(f"error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, ValidationError):  # a value from an input broke a bound of s2r.profile
+            first = exc.errors()[0] if exc.errors() else {"loc": (), "msg": str(exc)}
+            where = ".".join(str(p) for p in first["loc"]) or exc.title
+            print(f"error: {where}: {' '.join(str(first['msg']).split())}", file=sys.stderr)
             return EXIT_BAD_INPUT
         if isinstance(exc, OSError) and exc.filename is not None:  # a file the user named is unusable
             print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)

@@ -9,12 +9,15 @@ import re
 import sys
 import time
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
-__all__ = ["ProgressBar", "add_force", "add_json", "argparse_type", "parse_distances", "parse_pattern", "print_json",
-           "to_jsonable"]
+if TYPE_CHECKING:
+    from s2r.profile import StereoProfile
+
+__all__ = ["ProgressBar", "add_force", "add_json", "argparse_type", "load_profile", "parse_distances", "parse_pattern",
+           "print_json", "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -38,6 +41,13 @@ def parse_distances(text: str) -> tuple[float, ...]:
     if not values or not all(math.isfinite(v) and v > 0 for v in values):
         raise ValueError(f"distances must be positive metres, got {text!r} (e.g. 0.5,1,2,3)")
     return values
+
+
+def load_profile(name_or_path: Any) -> StereoProfile:
+    """:func:`s2r.registry.load_profile`, imported on first use: building the parser loads no profile models."""
+    from s2r.registry import load_profile as load
+
+    return load(name_or_path)
 
 
 def argparse_type(parse: Callable[[str], T]) -> Callable[[str], T]:

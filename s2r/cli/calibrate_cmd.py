@@ -10,7 +10,6 @@ from typing import Any
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.errors import CalibrationError
 from s2r.fileio import check_output_free, prepare_output_dir
-from s2r.formats.s2r_yaml import dump_profile
 
 __all__ = ["register"]
 
@@ -103,6 +102,8 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``s2r calibrate``; returns the exit code."""
+    from s2r.formats.s2r_yaml import dump_profile
+
     pattern = _check_args(args)
     lens, target = _lens_and_target(args, pattern)
     out = check_output_free(args.output, force=args.force)
@@ -152,6 +153,11 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _pm(value: float, sd: float | None, digits: int = 2) -> str:
+    """``value±std`` with the std in 2 significant digits (never a misleading ±0.00); ``±?`` when unknown."""
+    if sd is None:
+        return f"{value:.{digits}f}±?"
+    return f"{value:.{digits}f}±{sd:.2g}"
 def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
     """Calibrate with corner ids (a target file, or a fisheye lens): mono, folder/glob pairs or a bag."""
     kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
@@ -182,18 +188,30 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
 def _print_summary(result: Any, out: Path) -> None:
     figures = result.figures()
     q = figures["quality"] or {}
-    print(f"wrote {out}: {q.get('views_used')} views used, {len(figures['dropped'])} skipped or dropped")
+    verdict = figures.get("verdict")
+    if verdict:
+        flagged = [r["text"] for r in verdict["reasons"] if r["level"] != "good"]
+        print(f"verdict: {verdict['level'].upper()}" + (f" ({'; '.join(flagged)})" if flagged else ""))
+    print(f"wrote {out}: {q.get('views_used')} views used, {len(figures['dropped'])} skipped or dropped, "
+          f"lens model {q.get('distortion_terms')}")
     cams = [("camera", figures["camera"])] if "camera" in figures else [("left", figures["left"]),
                                                                          ("right", figures["right"])]
     for label, cam in cams:
         std = cam["std"] or {}
-        print(f"  {label:<6} fx {cam['fx_px']:.2f}±{std.get('fx_px', 0):.2f}  fy {cam['fy_px']:.2f}±"
-              f"{std.get('fy_px', 0):.2f}  cx {cam['cx_px']:.2f}±{std.get('cx_px', 0):.2f}  cy "
-              f"{cam['cy_px']:.2f}±{std.get('cy_px', 0):.2f} px")
+        print(f"  {label:<6} fx {_pm(cam['fx_px'], std.get('fx_px'))}  fy {_pm(cam['fy_px'], std.get('fy_px'))}  "
+              f"cx {_pm(cam['cx_px'], std.get('cx_px'))}  cy {_pm(cam['cy_px'], std.get('cy_px'))} px")
     if "baseline_m" in figures:
-        print(f"  baseline {figures['baseline_m'] * 1000:.2f}±{(figures['baseline_std_m'] or 0) * 1000:.2f} mm, "
-              f"RMS left {q.get('rms_left_px', 0):.3f} right {q.get('rms_right_px', 0):.3f} stereo "
+        t = figures["translation_m"]
+        b_std = figures["baseline_std_m"]
+        print(f"  T ({t[0] * 1000:+.2f}, {t[1] * 1000:+.2f}, {t[2] * 1000:+.2f}) mm, baseline "
+              f"{_pm(figures['baseline_m'] * 1000, None if b_std is None else b_std * 1000)} mm, RMS left "
+              f"{q.get('rms_left_px', 0):.3f} right {q.get('rms_right_px', 0):.3f} stereo "
               f"{q.get('rms_stereo_px', 0):.3f} px, epipolar {q.get('epipolar_rms_px', 0):.3f} px")
+        models = figures.get("model_comparison")
+        if models:
+            print("  held-out error: " + ", ".join(
+                f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
+                + " px (* used)")
     else:
         print(f"  RMS {q.get('rms_left_px', 0):.3f} px")
     for d in figures["dropped"]:

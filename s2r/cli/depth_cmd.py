@@ -37,7 +37,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--num-disparities", type=int, help="disparity range in px (multiple of 16)")
     parser.add_argument("--postprocess", help=f"comma-separated stages from {','.join(STAGES)} ('' for none); "
                         "default: the preset's")
-    parser.add_argument("--alpha", type=float, default=0.0, help="rectification alpha (0 valid pixels only)")
+    parser.add_argument("--alpha", type=float, default=0.0,
+                        help="rectification alpha in [0, 1] (0 valid pixels only, 1 every source pixel) or -1 "
+                        "(OpenCV's default)")
     parser.add_argument("--resize", action="store_true", help="accept other image sizes by rescaling intrinsics")
     parser.add_argument("--ply", action="store_true", help="also write a coloured point cloud (points.ply)")
     parser.add_argument("--keep-out-of-range", action="store_true",
@@ -69,6 +71,9 @@ def _cmd_depth(args: argparse.Namespace) -> int:
                          hint="drop one of them")
     if not sequence and (args.left is None or args.right is None):
         raise DepthError("missing images", field="LEFT RIGHT", hint="pass LEFT RIGHT or --left-dir/--right-dir")
+    if not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
+        raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
+                         field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
     pipeline = _pipeline(args)
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 

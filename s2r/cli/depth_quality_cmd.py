@@ -50,7 +50,8 @@ def register(sub: Any) -> None:
     parser.add_argument("--distance", type=float, help="flat-wall distance in metres (gives Z accuracy)")
     parser.add_argument("--roi", type=float, default=0.8, help="flat-wall ROI: share of width and height (0.8)")
     parser.add_argument("--depth-scale", type=float, default=0.001, help="metres per count of 16-bit depth")
-    parser.add_argument("--report", metavar="DIR", help="write DIR/depth_quality.html")
+    parser.add_argument("-o", "--output", "--report", dest="report", metavar="DIR",
+                        help="write DIR/depth_quality.html (--report is kept as an alias)")
     add_json(parser)
     add_force(parser)
     parser.set_defaults(func=_cmd_depth_quality)

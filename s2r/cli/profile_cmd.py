@@ -5,17 +5,15 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from s2r.cli._common import add_force, add_json, print_json
+from s2r.cli._common import add_force, add_json, load_profile, print_json
 from s2r.errors import FormatError
-from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
-from s2r.formats.kalibr import dump_kalibr
-from s2r.formats.s2r_yaml import dump_profile
-from s2r.profile import StereoProfile
-from s2r.registry import list_profiles, load_profile, resolve_profile
 
-__all__ = ["profile_summary", "register"]
+if TYPE_CHECKING:  # the formats and the profile models load when a command runs, not when the parser is built
+    from s2r.profile import MonoProfile, StereoProfile
+
+__all__ = ["mono_summary", "profile_summary", "register"]
 
 
 def register(sub: Any) -> Any:
@@ -54,7 +52,8 @@ def _register_convert(profile_sub: Any) -> None:
     p_conv.add_argument("src", nargs="+", metavar="SRC", help="input file(s): one, or two for ROS / OpenCV pairs")
     p_conv.add_argument("--to", required=True, choices=("s2r", "ros", "opencv", "kalibr"), help="output format")
     p_conv.add_argument("-o", "--output", required=True, metavar="OUT",
-                        help="output file (for --to ros: a folder receiving left.yaml and right.yaml)")
+                        help="output file (for --to ros: a folder receiving left.yaml and right.yaml; one "
+                        "camera_info file for a mono profile)")
     p_conv.add_argument("--name", help="profile name of the result (default: from the input)")
     p_conv.add_argument("--origin", default="real", choices=("real", "sim", "nominal"),
                         help="provenance origin of an imported profile (default real)")
@@ -102,6 +101,8 @@ def profile_summary(profile: StereoProfile) -> dict[str, Any]:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
+    from s2r.registry import list_profiles
+
     profiles = list_profiles()
     if args.json:
         print_json({name: str(path) for name, path in profiles.items()})
@@ -111,8 +112,44 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
+def mono_summary(profile: MonoProfile) -> dict[str, Any]:
+    """The derived figures of a mono profile (intrinsics, FOV)."""
+    cam = profile.camera
+    cal = profile.provenance.calibration
+    return {"name": profile.name, "origin": profile.provenance.origin, "convention": profile.provenance.convention,
+            "image_size": [cam.width_px, cam.height_px], "fx_px": cam.fx_px, "fy_px": cam.fy_px, "cx_px": cam.cx_px,
+            "cy_px": cam.cy_px, "distortion": cam.distortion.model, "coefficients": list(cam.distortion.coefficients),
+            "hfov_deg": math.degrees(cam.hfov_rad), "vfov_deg": math.degrees(cam.vfov_rad),
+            "rms_px": None if cal is None else cal.rms_left_px}
+
+
+def _show_mono(path: Path, as_json: bool) -> int:
+    from s2r.formats.s2r_yaml import load_mono_profile
+
+    profile = load_mono_profile(path)
+    summary = mono_summary(profile)
+    if as_json:
+        print_json({"summary": summary, "profile": profile})
+        return 0
+    w, h = summary["image_size"]
+    print(f"{profile.name}  (mono, {summary['origin']}, {summary['convention']} pixels)  {w}x{h}")
+    print(f"  fx {summary['fx_px']:.3f}  fy {summary['fy_px']:.3f}  cx {summary['cx_px']:.2f}  "
+          f"cy {summary['cy_px']:.2f}  HFOV {summary['hfov_deg']:.1f}°  VFOV {summary['vfov_deg']:.1f}°")
+    coeffs = " ".join(f"{c:.6g}" for c in summary["coefficients"])
+    print(f"  distortion {summary['distortion']}: {coeffs}")
+    if summary["rms_px"] is not None:
+        print(f"  calibration RMS {summary['rms_px']:.3f} px")
+    return 0
+
+
 def _cmd_show(args: argparse.Namespace) -> int:
-    profile = load_profile(args.profile)
+    from s2r.formats.mono import is_mono_profile_file
+    from s2r.registry import resolve_profile
+
+    path = resolve_profile(args.profile)
+    if is_mono_profile_file(path):
+        return _show_mono(path, args.json)
+    profile = load_profile(path)
     summary = profile_summary(profile)
     if args.json:
         print_json({"summary": summary, "profile": profile})
@@ -140,8 +177,12 @@ def _cmd_show(args: argparse.Namespace) -> int:
 def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
     out = Path(args.output)
     if args.to == "s2r":
+        from s2r.formats.s2r_yaml import dump_profile
+
         return [dump_profile(profile, out, force=args.force)]
     if args.to == "kalibr":
+        from s2r.formats.kalibr import dump_kalibr
+
         return [dump_kalibr(profile, out, force=args.force, drop_k3=args.drop_k3)]
     if args.to == "ros":
         from s2r.formats.ros import dump_ros_pair  # local: OpenCV (rectification) loads only when needed
@@ -152,11 +193,38 @@ def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
     return [dump_opencv(profile, out, force=args.force)]
 
 
+def _convert_mono(path: Path, args: argparse.Namespace) -> int:
+    """A mono profile to s2r, ROS (one camera_info file), Kalibr (cam0) or OpenCV (camera_matrix ...)."""
+    from s2r.formats.mono import dump_mono
+    from s2r.formats.s2r_yaml import dump_profile, load_mono_profile
+
+    profile = load_mono_profile(path)
+    if args.name:
+        profile = profile.model_copy(update={"name": args.name})
+    out = Path(args.output)
+    written = dump_profile(profile, out, force=args.force) if args.to == "s2r" else \
+        dump_mono(profile, out, args.to, force=args.force, drop_k3=args.drop_k3)
+    if args.json:
+        print_json({"input_format": "s2r mono", "inputs": [str(path)], "output_format": args.to,
+                    "outputs": [str(written)], "profile": mono_summary(profile)})
+        return 0
+    cam = profile.camera
+    print(f"read s2r mono profile: {path} -> {profile.name} ({cam.width_px}x{cam.height_px}, fx {cam.fx_px:.3f})")
+    print(f"wrote {written}")
+    return 0
+
+
 def _cmd_convert(args: argparse.Namespace) -> int:
+    from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
+    from s2r.formats.mono import is_mono_profile_file
+    from s2r.registry import resolve_profile
+
     if len(args.src) > 2:
         raise FormatError(f"expected one or two inputs, got {len(args.src)}", field="SRC",
                           hint="two inputs are a ROS left/right pair or OpenCV intrinsics + extrinsics")
     sources = [str(resolve_profile(args.src[0]))] if len(args.src) == 1 else args.src  # a name works too
+    if len(sources) == 1 and is_mono_profile_file(sources[0]):
+        return _convert_mono(Path(sources[0]), args)
     fmt = detect_format(sources[0])
     profile = load_any(sources, name=args.name, origin=args.origin, image_size=args.image_size,
                        t_scale_m=args.units_m, resolution=args.resolution, cameras=(args.left, args.right))

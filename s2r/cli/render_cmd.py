@@ -6,15 +6,23 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_distances, parse_pattern, print_json
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_json,
+    argparse_type,
+    load_profile,
+    parse_distances,
+    parse_pattern,
+    print_json,
+)
 from s2r.errors import RenderError
 from s2r.fileio import atomic_write_text
-from s2r.registry import load_profile
 
 __all__ = ["SCENE_CHOICES", "register"]
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
-SCENE_CHOICES = ("planes", "slanted", "room")
+SCENE_CHOICES = ("planes", "slanted", "span", "room")
 
 
 def _common(parser: argparse.ArgumentParser) -> None:

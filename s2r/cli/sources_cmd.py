@@ -8,11 +8,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import add_force, add_json, print_json
+from s2r.cli._common import add_force, add_json, load_profile, print_json
 from s2r.errors import SourceError
 from s2r.fileio import atomic_write_text, check_output_free
-from s2r.formats.s2r_yaml import dump_profile, profile_to_yaml
-from s2r.registry import load_profile
 
 __all__ = ["CONVENTION_CHOICES", "EXPORT_FORMAT_CHOICES", "parse_xacro_args", "register"]
 
@@ -82,6 +80,11 @@ def register(sub: Any, profile_sub: Any) -> None:
     p_exp.add_argument("--format", dest="fmt", choices=EXPORT_FORMAT_CHOICES, default="urdf",
                        help="urdf (Gazebo classic, two sensors), sdf (classic multicamera) or gz-sim")
     p_exp.add_argument("-o", "--output", type=Path, required=True, help="XML file to write")
+    p_exp.add_argument("--noise", type=float, default=None, metavar="SIGMA",
+                       help="Gaussian image noise stddev of the sensor (intensities 0..1); default the profile's "
+                       "simulation.noise_stddev; none without one (a calibration's RMS is not sensor noise)")
+    p_exp.add_argument("--parent-link", default=None, metavar="LINK",
+                       help="urdf: mount the rig on this robot link with a fixed joint (edit its origin)")
     add_force(p_exp)
     p_exp.set_defaults(func=_cmd_export)
 
@@ -115,6 +118,7 @@ def _cmd_lint(args: argparse.Namespace) -> int:
 
 
 def _cmd_from_urdf(args: argparse.Namespace) -> int:
+    from s2r.formats.s2r_yaml import dump_profile
     from s2r.sources.profile_builder import load_description_profile
 
     check_output_free(args.output, force=args.force)
@@ -142,7 +146,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
     check_output_free(args.output, force=args.force)
     profile = load_profile(args.profile)
-    text, warnings = export_gazebo(profile, fmt=args.fmt)
+    text, warnings = export_gazebo(profile, fmt=args.fmt, noise=args.noise, parent_link=args.parent_link)
     for warning in warnings:
         logger.warning("%s", warning)
     atomic_write_text(args.output, text, force=args.force)
@@ -151,6 +155,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_regenerate(args: argparse.Namespace) -> int:
+    from s2r.formats.s2r_yaml import profile_to_yaml
     from s2r.sources.shipped import REPO_ROOT, shipped_profiles
 
     stale = 0

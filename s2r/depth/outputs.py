@@ -29,6 +29,7 @@ from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
 from s2r.fileio import atomic_write_bytes, atomic_write_npy, atomic_write_text
 from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml
+from s2r.imageio import decode_image_file
 from s2r.rectification import StereoRectification
 
 __all__ = [
@@ -55,11 +56,9 @@ def read_image(path: str | Path) -> NDArray[np.uint8]:
     path = Path(path)
     if not path.is_file():
         raise DepthError("image file not found", path=path, hint="check the path")
-    data = np.fromfile(path, dtype=np.uint8)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    image, reason = decode_image_file(path, cv2.IMREAD_UNCHANGED)
     if image is None:
-        raise DepthError("cannot read image (not an image file, or corrupt)", path=path,
-                         hint="pass a PNG/JPEG/BMP/TIFF/PGM image")
+        raise DepthError(f"cannot read image: {reason}", path=path, hint="pass a PNG/JPEG/BMP/TIFF/PGM image")
     if image.dtype != np.uint8:
         raise DepthError(f"image has {image.dtype} pixels; the matcher needs 8-bit", path=path,
                          hint="convert it to 8-bit grey or colour")

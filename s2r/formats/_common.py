@@ -31,6 +31,7 @@ from s2r.profile import (
 )
 
 __all__ = [
+    "MAX_ABS_VALUE",
     "as_float",
     "as_int",
     "as_matrix",
@@ -49,6 +50,10 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 log = logging.getLogger(__name__)
+#: Largest magnitude of any number in a calibration file: focal lengths stay below about 2e6 px and P[0,3]
+#: (-fx B) below about 2e7 px m within s2r.profile's bounds; beyond 1e9 a value is corruption, and refusing
+#: it here keeps later arithmetic free of overflow.
+MAX_ABS_VALUE = 1e9
 
 
 def read_text(path: str | Path) -> str:
@@ -96,6 +101,9 @@ def as_float(value: Any, path: str | Path, field: str) -> float:
         number = math.inf
     if not math.isfinite(number):
         raise FormatError(f"must be a finite number, got {number}", path=path, field=field)
+    if abs(number) > MAX_ABS_VALUE:
+        raise FormatError(f"{number:g} is beyond {MAX_ABS_VALUE:g} in magnitude: no calibration value is that large "
+                          "(corrupted file or wrong units?)", path=path, field=field)
     return number
 
 
@@ -197,7 +205,8 @@ def distortion_for(model: str, coeffs: Sequence[float], path: str | Path, field:
         raise FormatError(
             f"distortion model {model} needs {expected} coefficients, got {len(values)}", path=path, field=field
         )
-    return Distortion(model=model, coefficients=tuple(values))  # type: ignore[arg-type]
+    distortion: Distortion = _validated(Distortion, {"model": model, "coefficients": tuple(values)}, path, field)
+    return distortion
 
 
 def _validated(model: type[BaseModel], data: dict[str, Any], path: str | Path, field: str) -> Any:
@@ -219,6 +228,10 @@ def build_camera(
     frame_id: str = "",
 ) -> Camera:
     """A :class:`Camera` from a 3x3 K (pixels) and ``(width, height)``; FormatError naming ``field``."""
+    if K[1, 0] != 0 or K[2, 0] != 0 or K[2, 1] != 0 or abs(K[2, 2] - 1.0) > 1e-9:
+        raise FormatError(f"not a camera matrix: its last row must be [0 0 1] and K[1,0] 0, got K[2] = "
+                          f"{K[2].tolist()}, K[1,0] = {K[1, 0]:g}", path=path, field=field,
+                          hint="a pinhole K is [[fx s cx] [0 fy cy] [0 0 1]]")
     if K[0, 0] <= 0 or K[1, 1] <= 0:
         raise FormatError(
             f"focal length must be positive, got fx={K[0, 0]:g} fy={K[1, 1]:g}", path=path, field=field,

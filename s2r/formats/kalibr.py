@@ -34,7 +34,7 @@ from s2r.formats._common import (
 from s2r.geometry import invert_transform
 from s2r.profile import Camera, StereoProfile
 
-__all__ = ["dump_kalibr", "is_kalibr_mapping", "kalibr_to_yaml", "load_kalibr", "strip_yaml_directive"]
+__all__ = ["camera_entry", "dump_kalibr", "is_kalibr_mapping", "kalibr_to_yaml", "load_kalibr", "strip_yaml_directive"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -137,6 +137,9 @@ def _right_from_left(data: dict[Any, Any], left: str, right: str, path: Path) ->
 
 def _choose(data: dict[Any, Any], left: str | None, right: str | None, path: Path) -> tuple[str, str]:
     cams = sorted((k for k in data if isinstance(k, str) and _index(k) is not None), key=lambda k: _index(k) or 0)
+    if left is None and right is None and len(cams) < 2:
+        raise FormatError(f"a camchain with {len(cams)} camera(s) ({', '.join(cams) or 'none'}): a stereo profile "
+                          "needs two", path=path, field="cam1", hint="pass the stereo camchain (cam0 and cam1)")
     if left is None and right is None:
         left, right = "cam0", "cam1"
         if len(cams) > 2:
@@ -178,7 +181,8 @@ def load_kalibr(
     )
 
 
-def _camera_entry(cam: Camera, *, drop_k3: bool, label: str, path: Path | None) -> dict[str, Any]:
+def camera_entry(cam: Camera, *, drop_k3: bool, label: str, path: Path | None) -> dict[str, Any]:
+    """One camera's Kalibr entry (pinhole, radtan or equidistant); refuses k3 != 0 unless ``drop_k3``."""
     coeffs = [float(c) for c in cam.distortion.coefficients]
     if cam.distortion.model == "plumb_bob":
         if coeffs[4] != 0.0 and not drop_k3:
@@ -202,11 +206,11 @@ def _camera_entry(cam: Camera, *, drop_k3: bool, label: str, path: Path | None) 
 
 def kalibr_to_yaml(profile: StereoProfile, *, drop_k3: bool = False, path: Path | None = None) -> str:
     """The profile as Kalibr camchain YAML text (full float precision); ``path`` only names errors."""
-    cam0 = {**_camera_entry(profile.left, drop_k3=drop_k3, label="left", path=path), "cam_overlaps": [1],
+    cam0 = {**camera_entry(profile.left, drop_k3=drop_k3, label="left", path=path), "cam_overlaps": [1],
             "rostopic": "/cam0/image_raw"}
     transform = np.eye(4)
     transform[:3, :3], transform[:3, 3] = profile.R, profile.T
-    cam1 = {"T_cn_cnm1": transform.tolist(), **_camera_entry(profile.right, drop_k3=drop_k3, label="right", path=path),
+    cam1 = {"T_cn_cnm1": transform.tolist(), **camera_entry(profile.right, drop_k3=drop_k3, label="right", path=path),
             "cam_overlaps": [0], "rostopic": "/cam1/image_raw"}
     header = f"# Kalibr camchain exported by s2r from profile {profile.name}\n"
     return header + yaml.safe_dump({"cam0": cam0, "cam1": cam1}, sort_keys=False, default_flow_style=None,

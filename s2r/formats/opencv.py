@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from s2r.errors import FormatError
 from s2r.fileio import atomic_write_text
 from s2r.formats._common import (
+    MAX_ABS_VALUE,
     as_int,
     as_matrix,
     build_camera,
@@ -39,11 +40,12 @@ from s2r.formats._common import (
 )
 from s2r.formats.filestorage import read_filestorage
 from s2r.formats.slam_settings import flavour_of, load_settings
-from s2r.profile import Camera, Distortion, StereoProfile
+from s2r.profile import Camera, Distortion, MonoProfile, StereoProfile
 from s2r.rectification import stereo_rectification
 
 __all__ = [
-    "OpenCVStereo", "dump_opencv", "load_opencv", "opencv_to_text", "read_filestorage_nodes", "read_opencv_stereo",
+    "OpenCVStereo", "dump_opencv", "load_opencv", "mono_opencv_text", "opencv_to_text", "read_filestorage_nodes",
+    "read_opencv_stereo",
 ]
 
 log = logging.getLogger(__name__)
@@ -124,6 +126,9 @@ def _array(nodes: dict[str, NodeValue | None], key: str, path: Path) -> FloatArr
         raise FormatError("expected a matrix", path=path, field=key)
     if not np.all(np.isfinite(value)):
         raise FormatError("must hold finite numbers only (found NaN or inf)", path=path, field=key)
+    if value.size and float(np.max(np.abs(value))) > MAX_ABS_VALUE:
+        raise FormatError(f"holds {float(np.max(np.abs(value))):g}, beyond {MAX_ABS_VALUE:g} in magnitude: no "
+                          "calibration value is that large (corrupted file or wrong units?)", path=path, field=key)
     return value
 
 
@@ -154,6 +159,15 @@ def read_opencv_stereo(paths: str | Path | Sequence[str | Path]) -> OpenCVStereo
     def where(key: str) -> Path:
         return merged[key][1] if key in merged else files[0]
 
+    calibration_keys = {"M1", "M2", "D1", "D2", "R", "T", "R1", "R2", "P1", "P2", "Q", "camera_matrix"}
+    if not calibration_keys & set(nodes):
+        found = ", ".join(sorted(nodes)[:8]) or "nothing"
+        raise FormatError(f"unrecognised OpenCV FileStorage: no stereo calibration in it (keys: {found})",
+                          path=files[0], hint="expected OpenCV stereo_calib (M1 D1 M2 D2 R T), ORB-SLAM, "
+                          "VINS-Fusion or Kimera-VIO stereo settings")
+    if "camera_matrix" in nodes and "M1" not in nodes:
+        raise FormatError("holds one camera (camera_matrix, distortion_coefficients): a stereo profile needs two",
+                          path=files[0], field="camera_matrix", hint="pass the stereo calibration file(s)")
     required = {}
     for key in ("M1", "D1", "M2", "D2"):
         value = _array(nodes, key, where(key))
@@ -288,6 +302,20 @@ def opencv_to_text(profile: StereoProfile, *, xml: bool = False, rectification: 
         nodes.update(R1=rect.R1, R2=rect.R2, P1=rect.P1, P2=rect.P2, Q=rect.Q)
     for key, value in nodes.items():
         storage.write(key, np.ascontiguousarray(value, dtype=np.float64))
+    return str(storage.releaseAndGetString())
+
+
+def mono_opencv_text(profile: MonoProfile, *, xml: bool = False) -> str:
+    """A mono profile as OpenCV's calibration sample writes one camera: image size, ``camera_matrix`` and
+    ``distortion_coefficients`` (plus ``distortion_model`` for equidistant)."""
+    storage = cv2.FileStorage("out.xml" if xml else "out.yml", cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_MEMORY)
+    cam = profile.camera
+    storage.write("image_width", int(cam.width_px))
+    storage.write("image_height", int(cam.height_px))
+    if cam.distortion.model == "equidistant":
+        storage.write("distortion_model", "equidistant")
+    storage.write("camera_matrix", np.ascontiguousarray(cam.K, dtype=np.float64))
+    storage.write("distortion_coefficients", np.ascontiguousarray(cam.D.reshape(1, -1), dtype=np.float64))
     return str(storage.releaseAndGetString())
 
 

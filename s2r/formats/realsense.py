@@ -32,7 +32,7 @@ from s2r.formats._common import (
     provenance_for,
     read_text,
 )
-from s2r.profile import Camera, Distortion, StereoProfile
+from s2r.profile import Camera, StereoProfile
 
 __all__ = ["RealSenseExtrinsic", "RealSenseIntrinsic", "is_realsense_text", "load_realsense", "parse_realsense"]
 
@@ -199,7 +199,7 @@ def _camera(intr: RealSenseIntrinsic, path: Path, frame_id: str) -> Camera:
     if model == "kannala brandt4":
         distortion = distortion_for("equidistant", intr.coeffs[:4], path, f"{field}: Coeffs")
     elif model in ("brown conrady", "none") or not any(intr.coeffs):
-        distortion = Distortion(model="plumb_bob", coefficients=intr.coeffs)
+        distortion = distortion_for("plumb_bob", intr.coeffs, path, f"{field}: Coeffs")
     else:
         raise FormatError(f"distortion model {intr.distortion!r} is not supported", path=path,
                           field=f"{field}: Distortion", hint="s2r reads Brown Conrady and Kannala Brandt4")

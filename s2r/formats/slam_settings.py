@@ -2,7 +2,8 @@
 
 - ORB-SLAM3 (``File.version: "1.0"``): ``Camera1.fx/fy/cx/cy/k1/k2/p1/p2[/k3]``, ``Camera2.*``,
   ``Camera.width/height`` and ``Stereo.T_c1_c2``: the pose of camera 2 in camera 1 (it maps points from c2 to
-  c1), so OpenCV's ``[R | T] = inv(T_c1_c2)``. ``Camera.type: KannalaBrandt8`` uses ``k1..k4`` (equidistant).
+  c1), so OpenCV's ``[R | T] = inv(T_c1_c2)``. ``Camera.type: KannalaBrandt8`` uses ``k1..k4`` (equidistant);
+  ``Camera.type: Rectified`` has only ``Camera1.*`` and ``Stereo.b`` (metres): R = I, ``T = (-b, 0, 0)``.
 - ORB-SLAM2 / old ORB-SLAM3 (``Camera.fx`` ... ``Camera.bf``): with ``LEFT.K/D/R/P`` and ``RIGHT.K/D/R/P`` the raw
   pair is recovered as from ROS camera_info (``R = R2^T R1``, ``T = R2^T (t2 - t1)``, ``t = K'^-1 P[:, 3]``);
   without them the images are already rectified: K from ``Camera.fx/fy/cx/cy``, no distortion, R = I and
@@ -116,6 +117,14 @@ def _orbslam3_camera(nodes: Nodes, n: int, size: tuple[int, int], path: Path) ->
 
 
 def _orbslam3(nodes: Nodes, path: Path) -> tuple[Camera, Camera, FloatArray, str]:
+    kind = str(nodes.get("Camera.type", "PinHole")).strip().strip('"')
+    if kind == "Rectified" and "Stereo.b" in nodes:  # already rectified images: one K, no distortion, baseline b
+        size = _size(nodes, "Camera.width", "Camera.height", path)
+        K = _K(*(_num(nodes, "Camera1." + k, path) for k in ("fx", "fy", "cx", "cy")))
+        camera = build_camera(K=K, size=size, distortion=Distortion(), path=path, field="Camera1.fx")
+        T = np.eye(4)
+        T[0, 3] = -_num(nodes, "Stereo.b", path)
+        return camera, camera, T, "Stereo.b (metres) of the rectified pair"
     if "Camera2.fx" not in nodes or "Stereo.T_c1_c2" not in nodes:
         raise FormatError("an ORB-SLAM3 settings file without Camera2 and Stereo.T_c1_c2 holds one camera (monocular "
                           "or rectified stereo: Stereo.b)", path=path, field="Camera2.fx",

@@ -14,7 +14,6 @@ import configparser
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from s2r.errors import FormatError
 from s2r.formats._common import as_float, build_camera, build_stereo, distortion_for, provenance_for, read_text
@@ -95,6 +94,8 @@ def load_zed(path: str | Path, *, resolution: tuple[int, int] | None = None, nam
     ty = _number(stereo, f"TY_{res}", source, _number(stereo, "TY", source, 0.0))
     tz = _number(stereo, f"TZ_{res}", source, _number(stereo, "TZ", source, 0.0))
     rvec = [_number(stereo, f"{k}_{res}", source, 0.0) for k in ("RX", "CV", "RZ")]
+    from scipy.spatial.transform import Rotation  # local: profile show/convert start without scipy
+
     R = np.asarray(Rotation.from_rotvec(rvec).as_matrix(), dtype=np.float64)  # = cv2.Rodrigues(rvec)
     T = np.array([-baseline_mm, ty, tz]) / 1000.0
     return build_stereo(

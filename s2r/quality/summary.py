@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -13,9 +14,10 @@ from s2r.quality.metrics import FrameQuality
 
 __all__ = ["DEFAULT_BINS_M", "BinQuality", "datasheet_figures", "summarise_bins"]
 
-#: Distance bins (metres, [lo, hi)) of the per-bin summary; empty bins are left out.
-DEFAULT_BINS_M: tuple[tuple[float, float], ...] = (
-    (0.0, 0.5), (0.5, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 5.0), (5.0, 20.0))
+#: Distance bins (metres, [lo, hi)) of the per-bin summary, finer near the camera where boards are usually
+#: recorded (and where a few centimetres change the error most); empty bins are left out.
+_EDGES_M = (0.0, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 7.0, 10.0, 20.0)
+DEFAULT_BINS_M: tuple[tuple[float, float], ...] = tuple(pairwise(_EDGES_M))
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,9 @@ __all__ = ["SCENES", "Layout", "scene_layouts"]
 FloatArray = NDArray[np.float64]
 #: One frame's surfaces and its description (plain, YAML-ready values).
 Layout = tuple[tuple[Surface, ...], dict[str, Any]]
-SCENES = ("planes", "slanted", "room")
+SCENES = ("planes", "slanted", "span", "room")
+#: Depth ratio (far / near) a "span" plane covers across the image width: every pixel sees another sub-pixel phase.
+SPAN_RATIO = 1.5
 _TEXTURE_PX = 1024
 _MAX_SIDE_FACTOR = 20.0
 _MAX_INCIDENCE_DEG = 72.0
@@ -108,6 +110,21 @@ def _slant(profile: StereoProfile, k: int) -> FloatArray:
     return R
 
 
+def _span(profile: StereoProfile, k: int, seed: int) -> FloatArray:
+    """Rotation of "span" plane k: tilted about the vertical axis so that its depth grows by ``SPAN_RATIO`` from
+    one side of the left image to the other (side chosen by the seed), plus a smaller seeded tilt about the
+    horizontal axis. The plane ``Z - a X - b Y = Z0`` has depth ``Z0 / (1 - a x - b y)`` along the ray (x, y, 1)."""
+    rng = np.random.default_rng([seed, k, 77])
+    rays = _field_rays(profile)
+    x_max, y_max = float(np.max(np.abs(rays[:, 0]))), float(np.max(np.abs(rays[:, 1])))
+    a = (SPAN_RATIO - 1.0) / (SPAN_RATIO + 1.0) / x_max * (1.0 if rng.random() < 0.5 else -1.0)
+    b = rng.uniform(-0.3, 0.3) * abs(a) * x_max / y_max
+    z = np.array([-a, -b, 1.0]) / math.sqrt(a * a + b * b + 1.0)
+    x = np.cross([0.0, 1.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
 def _room(profile: StereoProfile, tmp: Path, distances: Sequence[float], seed: int) -> Layout:
     depth = max(distances) + 0.5
     rays = _field_rays(profile)
@@ -136,6 +153,9 @@ def scene_layouts(profile: StereoProfile, tmp: Path, *, scene: str, distances_m:
         return [_plane_frame(profile, tmp, k, d, np.eye(3), seed, scene) for k, d in enumerate(distances_m)]
     if scene == "slanted":
         return [_plane_frame(profile, tmp, k, d, _slant(profile, k), seed, scene) for k, d in enumerate(distances_m)]
+    if scene == "span":
+        return [_plane_frame(profile, tmp, k, d, _span(profile, k, seed), seed, scene)
+                for k, d in enumerate(distances_m)]
     if scene == "room":
         return [_room(profile, tmp, distances_m, seed)]
     raise RenderError(f"unknown scene {scene!r}", field="scene", hint=f"choose one of {', '.join(SCENES)}")

@@ -25,14 +25,23 @@ from s2r.fileio import atomic_write_npy, atomic_write_text
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
+from s2r.render.boards import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
 from s2r.render.outputs import clear_numbered, encode_png, numbered_names
 from s2r.render.parallel import run_jobs
-from s2r.render.poses import clip_planes
-from s2r.render.rig import StereoJob, check_render_options, finish_image, render_stereo, stereo_setups
+from s2r.render.poses import BoardGeometry, clip_planes
+from s2r.render.rig import (
+    StereoJob,
+    check_render_options,
+    finish_image,
+    render_stereo,
+    render_stereo_images,
+    stereo_setups,
+)
 from s2r.render.sensor import Capture
+from s2r.render.world import Surface
 
-__all__ = ["SceneFrame", "render_scene", "write_scene"]
+__all__ = ["SceneFrame", "render_boards_at", "render_scene", "write_scene"]
 
 F32 = NDArray[np.float32]
 
@@ -100,12 +109,14 @@ def render_scene(
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
     progress: ProgressCallback | None = None, right_gain: float = 1.0,
 ) -> list[SceneFrame]:
-    """Render ``scene`` ("planes", "slanted" or "room") through ``profile`` with exact ground truth.
+    """Render ``scene`` ("planes", "slanted", "span" or "room") through ``profile`` with exact ground truth.
 
     "planes": one fronto-parallel speckle plane per distance (metres, left z) filling the view; "slanted":
-    one slanted plane through (0, 0, d) per distance; "room": one frame of a textured box room (back wall
-    0.5 m beyond the farthest distance) with a textured box at each distance. See the module docstring
-    for how the rectified ground truth is computed. ``right_gain`` scales the right image's grey levels.
+    one slanted plane through (0, 0, d) per distance; "span": one plane through (0, 0, d) per distance tilted
+    so its depth grows by ``SPAN_RATIO`` (1.5) across the image width, sampling every sub-pixel phase; "room":
+    one frame of a textured box room (back wall 0.5 m beyond the farthest distance) with a textured box at each
+    distance. See the module docstring for how the rectified ground truth is computed. ``right_gain`` scales
+    the right image's grey levels.
     """
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     near, far = clip_planes(profile)
@@ -128,6 +139,24 @@ def render_scene(
                        "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info}
         frames.append(SceneFrame(name, left, right, depth, disp, depth_rect, description))
     return frames
+
+
+def render_boards_at(
+    profile: StereoProfile, poses: Sequence[NDArray[np.float64]], *, pattern: tuple[int, int], square_m: float,
+    supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
+    """Render a chessboard (``pattern`` inner corners, ``square_m`` squares, the calibration boards' margin) at each
+    pose ``T_left_board`` (4x4, board frame -> LEFT optical frame, metres; origin at the first inner corner, x along
+    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose."""
+    check_render_options(supersample=supersample, noise_sigma=noise_sigma)
+    board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
+    left_setup, right_setup = stereo_setups(profile, supersample=supersample)
+    with tempfile.TemporaryDirectory(prefix="s2r-boards-at-") as tmp:
+        mesh, texture = board_surface(Path(tmp), board)
+        jobs_list = [StereoJob(left_setup, right_setup, (Surface(mesh, texture, np.asarray(T, np.float64)),),
+                               noise_sigma, 1.0, seed, k) for k, T in enumerate(poses)]
+        return list(run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards"))
 
 
 def write_scene(frames: Sequence[SceneFrame], out_dir: str | Path, *, force: bool = False) -> Path:

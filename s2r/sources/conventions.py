@@ -42,6 +42,7 @@ __all__ = [
     "hfov_from_focal",
     "intrinsics_for",
     "opencv_to_gazebo_distortion",
+    "texture_center",
 ]
 
 CONVENTIONS = ("gazebo-classic", "gz-sim", "exact")
@@ -111,12 +112,23 @@ def _design(x: FloatArray, y: FloatArray, sx: float, sy: float) -> FloatArray:
     return np.vstack([np.column_stack(cols_u) * sx, np.column_stack(cols_v) * sy])
 
 
-def _models(width: int, height: int, fx: float, fy: float,
-            center: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
+def _models(width: int, height: int, fx: float, fy: float, center: tuple[float, float],
+            principal: tuple[float, float] | None = None) -> tuple[FloatArray, FloatArray]:
+    """Design matrices of the OpenCV model (about the principal point ``principal``, exact 0-based pixels;
+    default the image centre) and of Gazebo's (about ``center`` in texture coordinates) on one pixel grid."""
     du, dv = _grid(width, height)
-    a_cv = _design(du / fx, dv / fy, fx, fy)
+    cx, cy = principal if principal is not None else ((width - 1) / 2.0, (height - 1) / 2.0)
+    x_cv = (du + (width - 1) / 2.0 - cx) / fx
+    y_cv = (dv + (height - 1) / 2.0 - cy) / fy
+    a_cv = _design(x_cv, y_cv, fx, fy)
     xn, yn = du / width + 0.5 - center[0], dv / height + 0.5 - center[1]
     return a_cv, _design(xn, yn, float(width), float(height))
+
+
+def texture_center(width: int, height: int, cx: float, cy: float) -> tuple[float, float]:
+    """Gazebo's ``<distortion><center>`` (texture coordinates, 0.5 0.5 = image centre) of a principal point
+    ``(cx, cy)`` in exact 0-based pixel-centre coordinates: ``((cx + 0.5) / W, (cy + 0.5) / H)``."""
+    return (cx + 0.5) / width, (cy + 0.5) / height
 
 
 def _fit(source: FloatArray, target: FloatArray, coeffs: FloatArray) -> tuple[FloatArray, float, float]:
@@ -127,20 +139,41 @@ def _fit(source: FloatArray, target: FloatArray, coeffs: FloatArray) -> tuple[Fl
     return solved, float(np.sqrt(np.mean(err**2))), float(np.max(err))
 
 
+def _fit_used(source: FloatArray, target: FloatArray, coeffs: FloatArray) -> tuple[FloatArray, float, float]:
+    """:func:`_fit` over only the terms ``coeffs`` (k1, k2, k3, p1, p2) uses: k1, k2 when k2 or k3 is set, k3 when
+    set, both tangential terms when either is set. Free extra terms would only chase the aspect-ratio residual
+    and make the converted model non-invertible near the image corners."""
+    _, k2, k3, p1, p2 = (float(v) for v in coeffs)
+    used = [True, k2 != 0.0 or k3 != 0.0, k3 != 0.0, p1 != 0.0 or p2 != 0.0, p1 != 0.0 or p2 != 0.0]
+    cols = [i for i, keep in enumerate(used) if keep]
+    solved_used, rms, worst = _fit(source, target[:, cols], coeffs)
+    solved = np.zeros(5)
+    solved[cols] = solved_used
+    return solved, rms, worst
+
+
 def gazebo_to_opencv_distortion(k1: float, k2: float, k3: float, p1: float, p2: float, *, width: int, height: int,
-                                fx: float, fy: float, center: tuple[float, float] = (0.5, 0.5)) -> DistortionFit:
-    """OpenCV plumb_bob ``(k1, k2, p1, p2, k3)`` closest to Gazebo's ``<distortion>`` on a W x H image."""
-    a_cv, a_gz = _models(width, height, fx, fy, center)
-    solved, rms, worst = _fit(a_gz, a_cv, np.array([k1, k2, k3, p1, p2]))
-    c = [float(v) for v in solved]
-    return DistortionFit((c[0], c[1], c[3], c[4], c[2]), rms, worst)
+                                fx: float, fy: float, center: tuple[float, float] = (0.5, 0.5),
+                                principal: tuple[float, float] | None = None) -> DistortionFit:
+    """OpenCV plumb_bob ``(k1, k2, p1, p2, k3)`` closest to Gazebo's ``<distortion>`` on a W x H image.
+
+    ``principal``: the OpenCV principal point (exact 0-based pixels) the coefficients will be used with;
+    default the image centre. Only the terms the Gazebo model uses are fitted (see :func:`_fit_used`)."""
+    a_cv, a_gz = _models(width, height, fx, fy, center, principal)
+    solved = _fit_used(a_gz, a_cv, np.array([k1, k2, k3, p1, p2]))
+    c = [float(v) for v in solved[0]]
+    return DistortionFit((c[0], c[1], c[3], c[4], c[2]), solved[1], solved[2])
 
 
 def opencv_to_gazebo_distortion(coefficients: tuple[float, ...], *, width: int, height: int, fx: float,
-                                fy: float) -> DistortionFit:
-    """Gazebo ``(k1, k2, k3, p1, p2)`` (centre 0.5 0.5) closest to OpenCV plumb_bob ``(k1, k2, p1, p2, k3)``."""
+                                fy: float, principal: tuple[float, float] | None = None) -> DistortionFit:
+    """Gazebo ``(k1, k2, k3, p1, p2)`` closest to OpenCV plumb_bob ``(k1, k2, p1, p2, k3)``, with Gazebo's
+    distortion centre at the principal point (:func:`texture_center` of ``principal``; default the image centre).
+
+    Only the terms the OpenCV model uses are fitted (see :func:`_fit_used`)."""
     k1, k2, p1, p2, k3 = (tuple(coefficients) + (0.0,) * 5)[:5]
-    a_cv, a_gz = _models(width, height, fx, fy, (0.5, 0.5))
-    solved, rms, worst = _fit(a_cv, a_gz, np.array([k1, k2, k3, p1, p2]))
+    cx, cy = principal if principal is not None else ((width - 1) / 2.0, (height - 1) / 2.0)
+    a_cv, a_gz = _models(width, height, fx, fy, texture_center(width, height, cx, cy), (cx, cy))
+    solved, rms, worst = _fit_used(a_cv, a_gz, np.array([k1, k2, k3, p1, p2]))
     c = [float(v) for v in solved]
     return DistortionFit((c[0], c[1], c[2], c[3], c[4]), rms, worst)

@@ -9,8 +9,16 @@ Formats:
 - ``gz-sim``: two ``camera`` sensors with ``<lens><intrinsics>`` (fx, fy, cx, cy, s) - new Gazebo.
 
 ``horizontal_fov = 2 atan(W / (2 fx))`` is the exact inverse of every convention's focal length. Distortion
-is converted to Gazebo's image-normalised units (:mod:`s2r.sources.conventions`). What a format cannot
-express comes back as warnings that state the error left, in pixels.
+is converted to Gazebo's image-normalised units (:mod:`s2r.sources.conventions`) about the principal point
+the simulator renders (gz-sim: the profile's, written in ``<lens><intrinsics>`` and ``<distortion><center>``;
+classic: the image centre). What a format cannot express comes back as warnings that state the error left,
+in pixels.
+
+Pasting into a ROS robot: the URDF snippet defines the ``*_optical_frame`` links its plugins publish (joint
+rpy -pi/2 0 -pi/2 from each camera link) and, given ``parent_link``, the joint that mounts the rig on it.
+Image noise is emitted only from a sensor noise figure (``simulation.noise_stddev`` or ``noise``), never
+from a calibration's reprojection error (that is corner localisation, not sensor noise). A RealSense's
+infrared imagers are mono (``L8``) and publish on realsense2_camera's topics (``camera/infra1/image_rect_raw``).
 """
 
 from __future__ import annotations
@@ -23,16 +31,14 @@ import numpy as np
 from s2r.errors import SourceError
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
 from s2r.profile import Camera, StereoProfile
-from s2r.sources.conventions import CENTRE_OFFSET_PX, hfov_from_focal, opencv_to_gazebo_distortion
+from s2r.sources.conventions import CENTRE_OFFSET_PX, hfov_from_focal, opencv_to_gazebo_distortion, texture_center
 from s2r.sources.description import FloatArray
 
-__all__ = ["EXPORT_FORMATS", "export_gazebo", "noise_from_residual"]
+__all__ = ["EXPORT_FORMATS", "OPTICAL_RPY", "export_gazebo", "is_realsense"]
 
 EXPORT_FORMATS = ("urdf", "sdf", "gz-sim")
-#: Edge-localisation model used to turn a calibration RMS (pixels) into intensity noise (0..1):
-#: sigma_px = sigma_I * w / (C * sqrt(N)) with edge blur w, contrast C and N pixels across the edges.
-NOISE_MODEL = {"edge_blur_px": 1.5, "contrast": 1.0, "pixels": 66}
-NOISE_MAX = 0.05
+#: rpy of a ROS optical frame in its camera link (z forward, x right, y down).
+OPTICAL_RPY = f"{-math.pi / 2!r} 0 {-math.pi / 2!r}"
 
 
 def _num(value: float) -> str:
@@ -50,33 +56,28 @@ def _sub(parent: ET.Element, tag: str, text: str | float | int | None = None, **
     return node
 
 
-def noise_from_residual(rms_px: float) -> tuple[float, bool]:
-    """Gaussian intensity noise (0..1) whose corner-localisation error equals ``rms_px`` under
-    :data:`NOISE_MODEL`, capped at :data:`NOISE_MAX`; returns (stddev, capped)."""
-    m = NOISE_MODEL
-    sigma = rms_px * m["contrast"] * math.sqrt(m["pixels"]) / m["edge_blur_px"]
-    return min(sigma, NOISE_MAX), sigma > NOISE_MAX
+def is_realsense(profile: StereoProfile) -> bool:
+    """True for a RealSense infrared pair (imported from rs-enumerate-devices, or its infra optical frames)."""
+    return "infra1" in profile.left.frame_id or "rs-enumerate-devices" in profile.provenance.method \
+        or profile.name.lower().startswith("realsense")
 
 
 class _Exporter:
-    def __init__(self, profile: StereoProfile, fmt: str) -> None:
+    def __init__(self, profile: StereoProfile, fmt: str, noise: float | None) -> None:
         self.profile, self.fmt = profile, fmt
         self.warnings: list[str] = []
         self.offset = CENTRE_OFFSET_PX.get(profile.provenance.convention, 0.0)
-        self.noise = self._noise()
+        sim = profile.simulation
+        self.noise = noise if noise is not None else sim.noise_stddev if sim is not None else None
+        self.realsense = is_realsense(profile)
 
-    def _noise(self) -> float | None:
-        sim, cal = self.profile.simulation, self.profile.provenance.calibration
-        if sim is not None and sim.noise_stddev is not None:
-            return sim.noise_stddev
-        rms = None if cal is None else next((r for r in (cal.rms_stereo_px, cal.rms_left_px) if r is not None), None)
-        if rms is None:
-            return None
-        sigma, capped = noise_from_residual(rms)
-        self.warnings.append(f"image noise stddev {sigma:.4f} from the calibration RMS {rms:.3f} px (edge model "
-                             f"{NOISE_MODEL})" + (f", capped at {NOISE_MAX}: most of that residual is not sensor "
-                                                  "noise" if capped else ""))
-        return sigma
+    def topic(self, side: str) -> tuple[str, str, str]:
+        """(camera name, image topic, frame) as the real driver publishes them (realsense2_camera for a RealSense)."""
+        if self.realsense:
+            n = 1 if side == "left" else 2
+            return f"camera/infra{n}", "image_rect_raw", f"camera_infra{n}_optical_frame"
+        p = self.profile
+        return f"{p.name}/{side}", "image_raw", f"{p.name}_{side}_optical_frame"
 
     def check_camera(self, side: str, cam: Camera) -> None:
         w, h = cam.width_px, cam.height_px
@@ -102,7 +103,7 @@ class _Exporter:
         image = _sub(node, "image")
         _sub(image, "width", cam.width_px)
         _sub(image, "height", cam.height_px)
-        _sub(image, "format", "R8G8B8")
+        _sub(image, "format", "L8" if self.realsense else "R8G8B8")
         sim = self.profile.simulation
         clip = _sub(node, "clip")
         _sub(clip, "near", sim.clip_near_m if sim else 0.05)
@@ -127,8 +128,12 @@ class _Exporter:
         if cam.distortion.model != "plumb_bob":
             self.warnings.append(f"{side}: {cam.distortion.model} distortion has no Gazebo equivalent and was dropped")
             return
+        # Distortion about the principal point the simulator renders (exact 0-based pixels): the profile's in
+        # gz-sim (<lens><intrinsics> carries it), the image centre in Gazebo classic (which renders centred).
+        principal = ((cam.cx_px - self.offset, cam.cy_px - self.offset) if self.fmt == "gz-sim"
+                     else ((cam.width_px - 1) / 2.0, (cam.height_px - 1) / 2.0))
         fit = opencv_to_gazebo_distortion(cam.distortion.coefficients, width=cam.width_px, height=cam.height_px,
-                                          fx=cam.fx_px, fy=cam.fy_px)
+                                          fx=cam.fx_px, fy=cam.fy_px, principal=principal)
         if fit.max_px > 0.01:
             self.warnings.append(f"{side}: plumb_bob distortion converted to Gazebo's image-normalised model with "
                                  f"{fit.rms_px:.3f} px RMS, {fit.max_px:.3f} px worst error (non-square image)")
@@ -138,7 +143,8 @@ class _Exporter:
         dist = _sub(node, "distortion")
         for tag, value in zip(("k1", "k2", "k3", "p1", "p2"), fit.coefficients, strict=True):
             _sub(dist, tag, value)
-        _sub(dist, "center", "0.5 0.5")
+        center = texture_center(cam.width_px, cam.height_px, *principal)
+        _sub(dist, "center", f"{_num(center[0])} {_num(center[1])}")
 
 
 def _pose_text(T: FloatArray) -> str:
@@ -151,12 +157,12 @@ def _optical_pose(profile: StereoProfile) -> FloatArray:
     return T_LINK_OPTICAL @ T_opt @ invert_transform(T_LINK_OPTICAL)
 
 
-def _plugin(parent: ET.Element, filename: str, name: str, frame: str, hack: float | None) -> None:
-    plugin = _sub(parent, "plugin", name=f"{name}_controller", filename=filename)
+def _plugin(parent: ET.Element, filename: str, name: str, frame: str, hack: float | None, image_topic: str) -> None:
+    plugin = _sub(parent, "plugin", name=f"{name.replace('/', '_')}_controller", filename=filename)
     _sub(plugin, "alwaysOn", "true")
     _sub(plugin, "updateRate", 0.0)
     _sub(plugin, "cameraName", name)
-    _sub(plugin, "imageTopicName", "image_raw")
+    _sub(plugin, "imageTopicName", image_topic)
     _sub(plugin, "cameraInfoTopicName", "camera_info")
     _sub(plugin, "frameName", frame)
     if hack is not None:
@@ -169,24 +175,36 @@ def _sensor(parent: ET.Element, kind: str, name: str, rate: float) -> ET.Element
     return sensor
 
 
-def _urdf(ex: _Exporter) -> ET.Element:
+def _urdf(ex: _Exporter, parent_link: str | None) -> ET.Element:
     p = ex.profile
     robot = ET.Element("robot", name=p.name)
     rate = p.simulation.update_rate_hz if p.simulation and p.simulation.update_rate_hz else 30.0
+    frames = {side: ex.topic(side)[2] for side in ("left", "right")}
     for side in ("left", "right"):
         _sub(robot, "link", name=f"{p.name}_{side}_link")
+        _sub(robot, "link", name=frames[side])
+    if parent_link:
+        mount = _sub(robot, "joint", name=f"{p.name}_mount_joint", type="fixed")
+        _sub(mount, "parent", link=parent_link)
+        _sub(mount, "child", link=f"{p.name}_left_link")
+        _sub(mount, "origin", xyz="0 0 0", rpy="0 0 0")
     joint = _sub(robot, "joint", name=f"{p.name}_left_to_right", type="fixed")
     _sub(joint, "parent", link=f"{p.name}_left_link")
     _sub(joint, "child", link=f"{p.name}_right_link")
     T = _optical_pose(p)
     _sub(joint, "origin", xyz=" ".join(_num(v) for v in T[:3, 3]),
          rpy=" ".join(_num(v) for v in rpy_from_rotation(T[:3, :3])))
+    for side in ("left", "right"):
+        optical = _sub(robot, "joint", name=f"{frames[side]}_joint", type="fixed")
+        _sub(optical, "parent", link=f"{p.name}_{side}_link")
+        _sub(optical, "child", link=frames[side])
+        _sub(optical, "origin", xyz="0 0 0", rpy=OPTICAL_RPY)
     for side, cam in (("left", p.left), ("right", p.right)):
         gazebo = _sub(robot, "gazebo", reference=f"{p.name}_{side}_link")
         sensor = _sensor(gazebo, "camera", f"{side}_camera", rate)
         ex.camera(sensor, side, cam, name=side)
-        _plugin(sensor, "libgazebo_ros_camera.so", f"{p.name}/{side}", f"{p.name}_{side}_optical_frame",
-                p.baseline_m if side == "right" else None)
+        name, topic, frame = ex.topic(side)
+        _plugin(sensor, "libgazebo_ros_camera.so", name, frame, p.baseline_m if side == "right" else None, topic)
     return robot
 
 
@@ -203,29 +221,39 @@ def _sdf(ex: _Exporter) -> ET.Element:
         for side, cam, pose in (("left", p.left, np.eye(4)), ("right", p.right, T_right)):
             sensor = _sensor(link, "camera", f"{side}_camera", rate)
             _sub(sensor, "pose", _pose_text(pose))
-            _sub(sensor, "topic", f"{p.name}/{side}/image_raw")
+            name, topic, frame = ex.topic(side)
+            _sub(sensor, "topic", f"{name}/{topic}")
             node = ex.camera(sensor, side, cam, name=side)
-            _sub(node, "optical_frame_id", f"{p.name}_{side}_optical_frame")
+            _sub(node, "optical_frame_id", frame)
         return sdf
     sensor = _sensor(link, "multicamera", "stereo_camera", rate)
     ex.camera(sensor, "left", p.left, name="left")
     right = ex.camera(sensor, "right", p.right, name="right")
     right.insert(0, ET.Element("pose"))
     right[0].text = _pose_text(T_right)
-    _plugin(sensor, "libgazebo_ros_multicamera.so", p.name, f"{p.name}_left_optical_frame", p.baseline_m)
+    _plugin(sensor, "libgazebo_ros_multicamera.so", "camera" if ex.realsense else p.name, ex.topic("left")[2],
+            p.baseline_m, ex.topic("left")[1])
     return sdf
 
 
-def export_gazebo(profile: StereoProfile, *, fmt: str = "urdf") -> tuple[str, list[str]]:
+def export_gazebo(profile: StereoProfile, *, fmt: str = "urdf", noise: float | None = None,
+                  parent_link: str | None = None) -> tuple[str, list[str]]:
     """Gazebo XML (``urdf`` | ``sdf`` | ``gz-sim``) for ``profile`` and warnings about what it cannot express.
+
+    Args:
+        noise: Gaussian image noise stddev (intensities 0..1) of the sensor; default the profile's
+            ``simulation.noise_stddev``; none is emitted without one.
+        parent_link: URDF only: the robot link the rig (its left camera link) is mounted on with a fixed joint.
 
     Returns:
         (XML text, warnings). Warnings say what was lost and the error it leaves in pixels.
     """
     if fmt not in EXPORT_FORMATS:
         raise SourceError(f"unknown export format {fmt!r}", field="--format", hint=f"use {', '.join(EXPORT_FORMATS)}")
-    ex = _Exporter(profile, fmt)
-    root = _urdf(ex) if fmt == "urdf" else _sdf(ex)
+    if noise is not None and not (0.0 <= noise <= 1.0 and math.isfinite(noise)):
+        raise SourceError(f"noise stddev must be in [0, 1] (intensities), got {noise}", field="--noise")
+    ex = _Exporter(profile, fmt, noise)
+    root = _urdf(ex, parent_link) if fmt == "urdf" else _sdf(ex)
     ET.indent(root, space="  ")
     header = (f"<?xml version=\"1.0\"?>\n<!-- s2r profile export-gazebo, format {fmt}: {profile.name} "
               f"({profile.provenance.origin}, {profile.provenance.convention} pixels); baseline "

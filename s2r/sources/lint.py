@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from s2r.errors import SourceError
 from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
 from s2r.sources.description import CameraSpec, Description
 from s2r.sources.lint_geometry import baseline_findings
@@ -250,6 +251,18 @@ def _camera_info_rules(report: _Report, pair: StereoPair, info: Any) -> None:
                    "check which simulator published it", line, "<horizontal_fov>")
 
 
+def _profile_rule(report: _Report, description: Description, pair: Any) -> None:
+    """``invalid-profile`` (error): the pair breaks a physical bound of s2r.profile, so ``profile from-urdf``
+    refuses it (lint and from-urdf agree)."""
+    from s2r.sources.profile_builder import profile_from_pair
+
+    try:
+        profile_from_pair(description, pair, convention="exact")
+    except SourceError as exc:
+        report.add("error", "invalid-profile", f"profile from-urdf refuses this pair: {exc.message}",
+                   "fix the value the message names", pair.right.lines.get("sensor"), "<sensor")
+
+
 def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: Mapping[str, str] | None = None,
                      package_paths: Sequence[Path] = (), left: str | None = None,
                      right: str | None = None) -> list[Finding]:
@@ -277,6 +290,7 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
         _focal_rules(report, camera)
     for severity, code, message, fix, line, needles in baseline_findings(description, pair):
         report.add(severity, code, message, fix, line, *needles)
+    _profile_rule(report, description, pair)
     _pair_rules(report, pair)
     _hack_rules(report, pair)
     _clip_rules(report, pair)

@@ -14,9 +14,10 @@ from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
+from s2r.sources.sdf_include import resolve_includes
 from s2r.sources.urdf import parse_urdf
 from s2r.sources.xacro_expand import expand_xacro, is_xacro
-from s2r.sources.xmlparse import parse_xml
+from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["StereoPair", "load_description", "optical_pose", "select_pair", "stereo_pair"]
 
@@ -38,16 +39,23 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
                      package_paths: Sequence[Path] = ()) -> Description:
     """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
 
+    A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
+    ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
+    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`).
+
     Raises:
         SourceError: missing file, xacro failure, malformed XML, unknown root element, missing links.
     """
     source = Path(path)
     text = read_text_file(source, error=SourceError)
-    expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if is_xacro(source) else text
+    uses_xacro = is_xacro(source) or "xmlns:xacro" in text or "<xacro:" in text  # .gazebo, .xacro.sdf, ...
+    expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if uses_xacro else text
     doc = parse_xml(expanded, source)
     if doc.root.tag == "robot":
+        _check_legacy_macro_calls(doc, text)
         description = parse_urdf(doc)
     elif doc.root.tag in ("sdf", "model", "world"):
+        resolve_includes(doc, source.parent, package_paths)
         description = parse_sdf(doc)
     else:
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
@@ -55,6 +63,30 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     description.source_text, description.expanded_text = text, expanded
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
+
+
+#: Elements a URDF <robot> holds; anything else left after xacro may be an unexpanded (legacy) macro call.
+_URDF_CHILDREN = frozenset({"link", "joint", "gazebo", "transmission", "material", "ros2_control", "sensor"})
+
+
+def _check_legacy_macro_calls(doc: XmlDoc, source_text: str) -> None:
+    """xacro 2 leaves a macro call without the ``xacro:`` prefix (legacy ROS 1 syntax) as a plain element: name it."""
+    macros = set(re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)[\"']", source_text))
+    for child in doc.root:
+        tag = child.tag
+        if tag in _URDF_CHILDREN or ":" in tag or "}" in tag:
+            continue
+        line = doc.line(child)
+        if tag not in macros:
+            if "xacro" in source_text:
+                logger.warning("%s: <%s> (line %s of the expanded XML) is not a URDF element; if it is a macro "
+                               "call, write <xacro:%s .../>", doc.path, tag, line, tag)
+            continue
+        source_line = next((n for n, text in enumerate(source_text.splitlines(), start=1) if f"<{tag}" in text
+                            and f"<xacro:{tag}" not in text), None)
+        raise SourceError(f"<{tag}> is a legacy macro call without the xacro: prefix, which xacro 2 no longer "
+                          "expands", path=doc.path, field=f"<{tag}>" + (f" line {source_line}" if source_line else ""),
+                          hint=f"write <xacro:{tag} .../> (the ROS 1 xacro --inorder syntax)")
 
 
 def _pick(description: Description, query: str, option: str) -> CameraSpec:

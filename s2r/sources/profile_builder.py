@@ -24,7 +24,13 @@ from s2r.profile import (
     SourceFile,
     StereoProfile,
 )
-from s2r.sources.conventions import check_convention, gazebo_to_opencv_distortion, intrinsics_for
+from s2r.sources.conventions import (
+    CENTRE_OFFSET_PX,
+    Intrinsics,
+    check_convention,
+    gazebo_to_opencv_distortion,
+    intrinsics_for,
+)
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
 from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
 
@@ -55,12 +61,13 @@ def seed_matcher(fx_px: float, baseline_m: float, width_px: int, *, far_limit_m:
     return MatcherSettings(algorithm="sgbm", min_depth_m=min_depth, max_depth_m=max_depth, **SEED_SGBM)
 
 
-def _distortion(spec: CameraSpec, fx: float, fy: float) -> Distortion:
+def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
     d = spec.distortion
     if d is None or d.is_zero:
         return Distortion()
+    offset = CENTRE_OFFSET_PX[convention]
     fit = gazebo_to_opencv_distortion(d.k1, d.k2, d.k3, d.p1, d.p2, width=spec.width, height=spec.height,
-                                      fx=fx, fy=fy, center=d.center)
+                                      fx=k.fx, fy=k.fy, center=d.center, principal=(k.cx - offset, k.cy - offset))
     if fit.max_px > 0.05:
         logger.warning("camera %r: Gazebo's image-normalised <distortion> has no exact OpenCV equivalent at %dx%d; "
                        "the fitted plumb_bob model differs by %.3f px RMS, %.3f px at worst",
@@ -85,7 +92,7 @@ def _camera(spec: CameraSpec, convention: str) -> Camera:
     if not frame.endswith(OPTICAL_SUFFIXES):
         frame = spec.link if renders_as_link(spec) else f"{spec.link}_optical_frame"
     return Camera(width_px=spec.width, height_px=spec.height, fx_px=k.fx, fy_px=k.fy, cx_px=k.cx, cy_px=k.cy,
-                  skew=k.skew, distortion=_distortion(spec, k.fx, k.fy), frame_id=frame)
+                  skew=k.skew, distortion=_distortion(spec, k, convention), frame_id=frame)
 
 
 def _simulation(spec: CameraSpec) -> SimulationSettings:
@@ -161,15 +168,15 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
                       name: str | None = None, xacro_args: Mapping[str, str] | None = None) -> StereoProfile:
     """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
     source = description.path
-    left_cam = _camera(pair.left, convention)
-    right_cam = _camera(pair.right, convention)
-    extrinsics = _extrinsics(pair, source)
-    baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
-    simulation = _simulation(pair.left)
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
     notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
              f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
-    try:
+    try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
+        left_cam = _camera(pair.left, convention)
+        right_cam = _camera(pair.right, convention)
+        extrinsics = _extrinsics(pair, source)
+        baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
+        simulation = _simulation(pair.left)
         return StereoProfile(
             name=name or _default_name(source),
             description=f"{description.kind.upper()} stereo pair from {source.name} ({convention} convention)",

@@ -14,6 +14,7 @@ import numpy as np
 
 from s2r.errors import SourceError
 from s2r.geometry import make_transform, rotation_from_rpy
+from s2r.profile import MAX_IMAGE_PX, MIN_IMAGE_PX
 from s2r.sources.description import (
     CameraSpec,
     FloatArray,
@@ -26,6 +27,9 @@ from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["CAMERA_SENSOR_TYPES", "camera_specs", "parse_pose", "read_float"]
 
+#: Largest pose coordinate accepted, metres or radians: 1000 km is beyond any robot or world file, and
+#: keeps transforms far from float overflow (a joint at 1e308 m).
+MAX_POSE_VALUE = 1e6
 CAMERA_SENSOR_TYPES = frozenset({"camera", "multicamera", "depth", "depth_camera", "rgbd_camera", "rgbd"})
 
 
@@ -55,9 +59,21 @@ def _floats(doc: XmlDoc, element: ET.Element, text: str | None, count: int) -> l
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise SourceError(f"expected {count} numbers, got {text!r}", path=doc.path, field=_where(doc, element),
-                          hint=f"write {count} space-separated numbers")
+        raise SourceError(f"expected {count} numbers, got {(text or '')[:80]!r}", path=doc.path,
+                          field=_where(doc, element), hint=f"write {count} space-separated numbers")
+    if any(abs(v) > MAX_POSE_VALUE for v in values):
+        raise SourceError(f"a value beyond {MAX_POSE_VALUE:g} (metres or radians) in {(text or '')[:80]!r}",
+                          path=doc.path, field=_where(doc, element), hint="poses are metres and radians")
     return values
+
+
+def _positive(doc: XmlDoc, element: ET.Element | None, value: float | None, what: str, *,
+              zero_ok: bool = False) -> float | None:
+    """``value`` when absent or positive (or zero if ``zero_ok``); SourceError naming ``element`` otherwise."""
+    if value is not None and element is not None and (value < 0 or (value == 0 and not zero_ok)):
+        raise SourceError(f"{what} must be {'zero or ' if zero_ok else ''}positive, got {value:g}", path=doc.path,
+                          field=_where(doc, element))
+    return value
 
 
 def parse_pose(doc: XmlDoc, element: ET.Element | None) -> FloatArray:
@@ -82,6 +98,8 @@ def _lens(doc: XmlDoc, camera: ET.Element) -> LensIntrinsics | None:
     if node is None:
         return None
     values = {k: read_float(doc, node.find(k)) for k in ("fx", "fy", "cx", "cy", "s")}
+    for k in ("fx", "fy"):
+        _positive(doc, node.find(k), values[k], f"<lens><intrinsics><{k}> (focal length in pixels)")
     if any(values[k] is None for k in ("fx", "fy", "cx", "cy")):
         raise SourceError("<lens><intrinsics> needs fx, fy, cx and cy", path=doc.path, field=_where(doc, node),
                           hint="add the missing elements or remove <intrinsics>")
@@ -131,9 +149,11 @@ def _plugin(doc: XmlDoc, sensor: ET.Element) -> PluginSpec | None:
 def _image_size(doc: XmlDoc, camera: ET.Element, field: str) -> int:
     node = camera.find(f"image/{field}")
     value = read_float(doc, node, 320.0 if field == "width" else 240.0)
-    if value is None or value <= 0 or value != int(value):
-        raise SourceError(f"image {field} must be a positive whole number of pixels", path=doc.path,
-                          field=_where(doc, node if node is not None else camera))
+    if value is None or value != int(value) or not MIN_IMAGE_PX <= value <= MAX_IMAGE_PX:
+        raise SourceError(f"image {field} must be a whole number of pixels from {MIN_IMAGE_PX} to {MAX_IMAGE_PX}, "
+                          f"got {value:g}" if value is not None else f"image {field} is empty", path=doc.path,
+                          field=_where(doc, node if node is not None else camera),
+                          hint="no stereo camera has a smaller or larger image")
     return int(value)
 
 
@@ -143,19 +163,30 @@ def _one_camera(doc: XmlDoc, sensor: ET.Element, camera: ET.Element, link: str, 
     camera_name = camera.get("name", "") or ""
     name = sensor_name if count == 1 else f"{sensor_name}/{camera_name or index}"
     hfov_node = camera.find("horizontal_fov")
-    hfov = read_float(doc, hfov_node, 1.047) or 1.047
+    if hfov_node is not None and not (hfov_node.text or "").strip():
+        raise SourceError("<horizontal_fov> is empty", path=doc.path, field=_where(doc, hfov_node),
+                          hint="give the field of view in radians, or remove the element for Gazebo's 1.047")
+    hfov = read_float(doc, hfov_node, 1.047)
+    assert hfov is not None
     if not 0.0 < hfov < math.pi:
         raise SourceError(f"horizontal_fov {hfov} rad is outside (0, pi)", path=doc.path,
                           field=_where(doc, camera if hfov_node is None else hfov_node),
                           hint="give the field of view in radians")
     clip = camera.find("clip")
+    near_node, far_node = (None, None) if clip is None else (clip.find("near"), clip.find("far"))
+    near = _positive(doc, near_node, read_float(doc, near_node), "<clip><near> (metres)")
+    far = _positive(doc, far_node, read_float(doc, far_node), "<clip><far> (metres)")
+    if near is not None and far is not None and far <= near:
+        raise SourceError(f"<clip><far> {far:g} m must exceed <near> {near:g} m", path=doc.path,
+                          field=_where(doc, far_node if far_node is not None else camera))
+    rate_node = sensor.find("update_rate")
+    rate = _positive(doc, rate_node, read_float(doc, rate_node), "<update_rate> (Hz; 0 means unthrottled)",
+                     zero_ok=True)
     return CameraSpec(
         name=name, sensor_name=sensor_name, camera_name=camera_name, sensor_type=sensor.get("type", ""),
         link=link, T_link_camera=parse_pose(doc, sensor.find("pose")) @ parse_pose(doc, camera.find("pose")),
         width=_image_size(doc, camera, "width"), height=_image_size(doc, camera, "height"), hfov_rad=hfov,
-        clip_near_m=read_float(doc, None if clip is None else clip.find("near")),
-        clip_far_m=read_float(doc, None if clip is None else clip.find("far")),
-        update_rate_hz=read_float(doc, sensor.find("update_rate")),
+        clip_near_m=near, clip_far_m=far, update_rate_hz=rate,
         distortion=_distortion(doc, camera), noise=_noise(doc, camera), lens=_lens(doc, camera),
         plugin=_plugin(doc, sensor), T_link_sensor=parse_pose(doc, sensor.find("pose")),
         index_in_sensor=index, cameras_in_sensor=count,

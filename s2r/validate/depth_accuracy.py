@@ -11,15 +11,16 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
-from s2r.profile import StereoProfile
+from s2r.profile import DEFAULT_SUBPIXEL_PX, StereoProfile
 from s2r.progress import ProgressCallback, report
+from s2r.validate.depth_sampling import BinSamples, frame_subpixel_rms, jitter_distances
 from s2r.validate.resolution import theory_rel_rms
 
 __all__ = ["DEFAULT_BINS_M", "BinStats", "DepthAccuracy", "DepthSamples", "bin_stats", "measure_depth_accuracy",
@@ -38,7 +39,10 @@ class BinStats:
 
     Percentages are of the true depth: ``median_pct``/``p90_pct`` of the absolute relative error, ``bias_pct``
     the median signed relative error; ``fill_rate`` valid estimates / scored pixels; ``theory_lo_pct`` and
-    ``theory_hi_pct`` Intel's theoretical RMS at the bin's ends (``None`` without a profile).
+    ``theory_hi_pct`` Intel's theoretical RMS at the bin's ends with Intel's 0.08 px sub-pixel error (``None``
+    without a profile); ``measured_theory_lo_pct``/``measured_theory_hi_pct`` the same model with the pipeline's
+    MEASURED sub-pixel RMS; ``ci_lo_pct``/``ci_hi_pct`` a 95 % bootstrap interval of ``median_pct`` over the
+    ``frames`` that reach the bin.
     """
 
     lo_m: float
@@ -51,6 +55,11 @@ class BinStats:
     bias_pct: float | None
     theory_lo_pct: float | None = None
     theory_hi_pct: float | None = None
+    frames: int | None = None
+    ci_lo_pct: float | None = None
+    ci_hi_pct: float | None = None
+    measured_theory_lo_pct: float | None = None
+    measured_theory_hi_pct: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON."""
@@ -81,12 +90,16 @@ class DepthAccuracy:
     within_3m: BinStats
     samples: DepthSamples | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    subpixel_rms_px: float | None = None
+    subpixel_frames: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON (without the sample images)."""
         return {"profile": self.profile, "preset": self.preset, "scenes": list(self.scenes),
                 "distances_m": list(self.distances_m), "bins": [b.as_dict() for b in self.bins],
-                "within_3m": self.within_3m.as_dict(), "seconds": self.seconds}
+                "within_3m": self.within_3m.as_dict(), "seconds": self.seconds,
+                "subpixel_rms_px": self.subpixel_rms_px, "subpixel_frames": self.subpixel_frames,
+                "subpixel_intel_px": DEFAULT_SUBPIXEL_PX}
 
 
 def pixel_errors(depth_m: NDArray[Any], truth_m: NDArray[Any], disparity_truth_px: NDArray[Any] | None = None
@@ -155,7 +168,8 @@ def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[flo
 
     frames: list[Any] = []
     rendered: list[tuple[str, Sequence[float]]] = []
-    for k, (scene, distances) in enumerate(scenes):
+    for k, (scene, nominal) in enumerate(scenes):
+        distances = nominal if scene == "room" else jitter_distances(nominal, seed=seed + 7919 * k)
         try:
             frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
                                    seed=seed, jobs=jobs, progress=progress)
@@ -175,7 +189,9 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
                            progress: ProgressCallback | None = None) -> DepthAccuracy:
     """Render each ``(scene, distances_m)`` through ``profile``, run the depth pipeline with ``preset``, score.
 
-    Every frame's pixels are pooled and binned by true depth (metres, rectified left frame).
+    Plane distances are jittered per frame (:func:`s2r.validate.depth_sampling.jitter_distances`); every frame's
+    pixels are pooled and binned by true depth (metres, rectified left frame); each bin gets a bootstrap interval
+    over frames, and planar frames give the pipeline's measured sub-pixel RMS.
     """
     from s2r.depth.pipeline import StereoPipeline
 
@@ -185,21 +201,45 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None
+    sampler, subpixel = BinSamples(bins, seed), []
     keep = _sample_index(frames)
+    K_rect, fb = pipeline.rectification.P1[:3, :3], pipeline.rectification.fx_px * pipeline.rectification.baseline_m
     for i, frame in enumerate(frames):
         result = pipeline.compute(frame.left, frame.right)
         t, r = pixel_errors(result.depth, frame.depth_rect_m, frame.disparity_rect_px)
         truths.append(t)
         rels.append(r)
+        sampler.add(t, r)
+        if frame.description.get("scene") in ("planes", "slanted", "span"):
+            on_plane = np.where(np.isfinite(frame.depth_rect_m), result.depth, np.nan)
+            subpixel.append(frame_subpixel_rms(on_plane, K_rect, fb))
         report(progress, i + 1, len(frames), "depth pipeline")
         if i == keep:
             samples = DepthSamples(f"{frame.description.get('scene', '')} {frame.name}", frame.left,
                                    np.asarray(result.rect_left), result.depth, frame.depth_rect_m)
     matched = time.perf_counter()
     truth, rel = np.concatenate(truths), np.concatenate(rels)
+    measured = [v for v in subpixel if v is not None]
+    s_px = float(np.median(measured)) if measured else None
     return DepthAccuracy(
         profile=profile.name, preset=preset, scenes=tuple(name for name, _ in rendered_scenes),
         distances_m=tuple(sorted({float(d) for _, ds in rendered_scenes for d in ds})),
-        bins=bin_stats(truth, rel, bins, profile=profile), within_3m=within_stats(truth, rel, 3.0, profile=profile),
+        bins=_with_intervals(bin_stats(truth, rel, bins, profile=profile), sampler, profile, s_px),
+        within_3m=within_stats(truth, rel, 3.0, profile=profile),
         samples=samples, seconds={"render_scenes": rendered - start, "depth_pipeline": matched - rendered},
+        subpixel_rms_px=s_px, subpixel_frames=len(measured),
     )
+
+
+def _with_intervals(stats: list[BinStats], sampler: BinSamples, profile: StereoProfile, s_px: float | None
+                    ) -> list[BinStats]:
+    """``stats`` with frame counts, bootstrap intervals and the measured-sub-pixel theory line."""
+    out = []
+    for i, b in enumerate(stats):
+        ci = sampler.interval(i)
+        theory = (None, None) if s_px is None else (100 * theory_rel_rms(profile, b.lo_m, subpixel_px=s_px),
+                                                     100 * theory_rel_rms(profile, b.hi_m, subpixel_px=s_px))
+        out.append(replace(b, frames=sampler.frames_in(i), ci_lo_pct=None if ci is None else ci[0],
+                           ci_hi_pct=None if ci is None else ci[1], measured_theory_lo_pct=theory[0],
+                           measured_theory_hi_pct=theory[1]))
+    return out

@@ -13,6 +13,7 @@ import numpy as np
 from s2r.fileio import prepare_output_dir
 from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, write_report
 from s2r.validate.depth_accuracy import DepthAccuracy
+from s2r.validate.recording_report import recording_section
 from s2r.validate.run import ValidationResult
 
 __all__ = ["EXTRA_SECTIONS", "REPORT_NAME", "build_sections", "write_validation_report"]
@@ -177,7 +178,10 @@ def _depth_figure(result: ValidationResult) -> str:
         ax.plot(centres, [float(b.p90_pct or 0) for b in scored], "s--", color=colour, alpha=0.6,
                 label=f"{role} p90 |error|")
         profile = result.roles[role]
-        ax.plot(z, 100 * profile.depth_rms_m(z) / z, ":", color=colour, label=f"{role} theory RMS")
+        ax.plot(z, 100 * profile.depth_rms_m(z) / z, ":", color=colour, label=f"{role} theory RMS (Intel, 0.08 px)")
+        if acc.subpixel_rms_px is not None:
+            ax.plot(z, 100 * profile.depth_rms_m(z, acc.subpixel_rms_px) / z, "-.", color=colour, alpha=0.7,
+                    label=f"{role} theory RMS (measured {acc.subpixel_rms_px:.3f} px)")
     ax.set_xlabel("true depth (m)")
     ax.set_ylabel("relative depth error (% of depth)")
     _legend_outside(ax)
@@ -188,21 +192,28 @@ def _depth(result: ValidationResult) -> ReportSection:
     roles = list(result.depth)
     headers = ["true depth bin (m)"]
     for role in roles:
-        headers += [f"{role} median |error| (%)", f"{role} p90 |error| (%)", f"{role} bias (%)",
-                    f"{role} fill rate (%)", f"{role} theory RMS (%)"]
+        headers += [f"{role} median |error| (%)", f"{role} median 95 % CI (%)", f"{role} p90 |error| (%)",
+                    f"{role} bias (%)", f"{role} fill rate (%)", f"{role} theory RMS (%), Intel 0.08 px",
+                    f"{role} theory RMS (%), measured sub-pixel"]
     rows = []
     for i, b in enumerate(next(iter(result.depth.values())).bins):
         row: list[Any] = [f"{b.lo_m:g}-{b.hi_m:g}"]
         for role in roles:
             s = result.depth[role].bins[i]
-            row += [s.median_pct, s.p90_pct, s.bias_pct, None if s.fill_rate is None else 100 * s.fill_rate,
-                    f"{s.theory_lo_pct or 0:.2f}-{s.theory_hi_pct or 0:.2f}"]
+            ci = "-" if s.ci_lo_pct is None or s.ci_hi_pct is None else f"{s.ci_lo_pct:.2f}-{s.ci_hi_pct:.2f}"
+            measured = ("-" if s.measured_theory_lo_pct is None or s.measured_theory_hi_pct is None
+                        else f"{s.measured_theory_lo_pct:.2f}-{s.measured_theory_hi_pct:.2f}")
+            row += [s.median_pct, ci, s.p90_pct, s.bias_pct, None if s.fill_rate is None else 100 * s.fill_rate,
+                    f"{s.theory_lo_pct or 0:.2f}-{s.theory_hi_pct or 0:.2f}", measured]
         rows.append(row)
     within = "; ".join(f"{role}: median |error| within 3 m {_pct(acc.within_3m.median_pct)}, fill rate "
                        f"{_fraction_pct(acc.within_3m.fill_rate)}" for role, acc in result.depth.items())
     acc0 = next(iter(result.depth.values()))
+    subpx = "; ".join(f"{role} {acc.subpixel_rms_px:.3f} px" for role, acc in result.depth.items()
+                      if acc.subpixel_rms_px is not None)
     text = (f"Preset {html.escape(acc0.preset)}, scenes {', '.join(acc0.scenes)}, planes at "
-            f"{', '.join(f'{d:g}' for d in acc0.distances_m)} m. {html.escape(within)}.")
+            f"{', '.join(f'{d:.3g}' for d in acc0.distances_m)} m (jittered per frame). {html.escape(within)}. "
+            f"Measured sub-pixel RMS (plane fit): {html.escape(subpx or 'n/a')}; Intel's model uses 0.08 px.")
     table = html_table(headers, rows, caption="Depth error by true depth, as a percentage of the true depth")
     return ReportSection("Depth accuracy (rendered ground truth, rectified left image)", paragraphs=[text],
                          tables=[table],
@@ -267,7 +278,7 @@ def _xml(result: ValidationResult) -> ReportSection:
 
 #: Builders of further sections, shown after the answer and before the test bench (each returns None to skip).
 #: Other validate stages (such as recordings) append theirs here.
-EXTRA_SECTIONS: list[Callable[[ValidationResult], ReportSection | None]] = []
+EXTRA_SECTIONS: list[Callable[[ValidationResult], ReportSection | None]] = [recording_section]
 
 
 def build_sections(result: ValidationResult) -> list[ReportSection]:

@@ -35,7 +35,7 @@ from s2r.validate.verdict import (
     recovery_checks,
 )
 
-__all__ = ["FULL", "QUICK", "Settings", "ValidationResult", "check_distances", "validate"]
+__all__ = ["FULL", "QUICK", "RecordingSpec", "Settings", "ValidationResult", "check_distances", "validate"]
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +60,7 @@ class ValidationResult:
     notes: list[str] = field(default_factory=list)
     checks: list[Check] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
+    recording: Any = None  # s2r.validate.recording.RecordingComparison with --recording
 
     @property
     def pair(self) -> bool:
@@ -79,8 +80,10 @@ class ValidationResult:
     @property
     def root_causes(self) -> list[RootCause]:
         """The failures grouped by the sim parameter that explains them (see :mod:`s2r.validate.causes`)."""
-        return group_failures(self.checks, self.params, self.edits, sim=self.roles.get("sim"),
-                              real=self.roles.get("real"), preset=self.settings.preset)
+        sim, real = self.roles.get("sim"), self.roles.get("real")
+        if sim is not None and real is not None:  # compared in the pixels the images obey, as the parameters are
+            sim, real = sim.in_opencv_pixels(), real.in_opencv_pixels()
+        return group_failures(self.checks, self.params, self.edits, sim=sim, real=real, preset=self.settings.preset)
 
     def as_dict(self) -> dict[str, Any]:
         """Every figure as plain JSON-ready data."""
@@ -97,7 +100,17 @@ class ValidationResult:
             "edits": [e.as_dict() for e in self.edits], "gazebo_xml": self.gazebo_xml, "notes": self.notes,
             "checks": [c.as_dict() for c in self.checks], "failures": [c.text for c in self.failures],
             "seconds": self.seconds,
+            **({"recording": self.recording.as_dict()} if self.recording is not None else {}),
         }
+
+
+@dataclass(frozen=True)
+class RecordingSpec:
+    """A real recording to compare on: a folder of stereo chessboard pairs, the board's inner corners and square."""
+
+    folder: str
+    pattern: tuple[int, int] = (9, 6)
+    square_m: float = 0.025
 
 
 def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[float]) -> None:
@@ -168,13 +181,21 @@ def _collect_checks(result: ValidationResult) -> list[Check]:
         checks += depth_checks(acc, tol, role)
     if result.pair:
         checks += depth_gap_checks(result.depth["sim"], result.depth["real"], tol)
+    if result.recording is not None:
+        from s2r.validate.recording import recording_checks
+
+        checks += recording_checks(result.recording)
     return checks
 
 
 def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerances: Tolerances | None = None,
              settings: Settings = FULL, jobs: int | None = None,
-             progress: Callable[[int, int, str], None] | None = None) -> ValidationResult:
+             progress: Callable[[int, int, str], None] | None = None,
+             recording: RecordingSpec | None = None) -> ValidationResult:
     """Validate ``sim`` against ``real`` (or ``sim`` alone: its self-check). See the module docstring.
+
+    With ``recording`` (needs ``real``), the real camera is also measured on its own recorded chessboard pairs and
+    the sim on renders of the same boards at the recovered poses (:mod:`s2r.validate.recording`).
 
     Raises:
         ValidateError: a profile's matcher cannot see the requested distances.
@@ -196,6 +217,14 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
             result.depth[role] = value
         for stage, secs in value.seconds.items():
             result.seconds[f"{stage} ({role})"] = secs
+    if recording is not None and real is not None:
+        from s2r.validate.recording import compare_recording
+
+        began = time.perf_counter()
+        result.recording = compare_recording(sim, real, recording.folder, pattern=recording.pattern,
+                                             square_m=recording.square_m, preset=settings.preset, tol=tol,
+                                             seed=settings.seed)
+        result.seconds["recording"] = time.perf_counter() - began
     result.checks = _collect_checks(result)
     result.seconds["total"] = time.perf_counter() - start
     return result

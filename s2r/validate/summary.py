@@ -56,18 +56,24 @@ def _recovery_lines(result: ValidationResult) -> list[str]:
 def _depth_lines(result: ValidationResult) -> list[str]:
     roles = list(result.depth)
     head = f"  {'bin':<9}" + "".join(f"| {role[:7]:<7} med%  p90%  bias%  fill " for role in roles)
-    lines = [head + "| theory% at far end (" + "/".join(roles) + ")"]
+    lines = [head + "| theory% at far end, Intel 0.08 px / measured sub-pixel (" + "/".join(roles) + ")"
+             + " | median 95% CI"]
     for i, b in enumerate(result.depth[roles[0]].bins):
         text = f"  {f'{b.lo_m:g}-{b.hi_m:g} m':<9}"
         for role in roles:
             s = result.depth[role].bins[i]
             fill = "-" if s.fill_rate is None else f"{s.fill_rate:.0%}"
             text += f"| {_value(s.median_pct, 3):>12} {_value(s.p90_pct, 3):>5} {_value(s.bias_pct, 2):>6} {fill:>5} "
-        theory = "/".join(f"{result.depth[r].bins[i].theory_hi_pct or 0:.2f}" for r in roles)
-        lines.append(text + f"| {theory}")
+        theory = "/".join(f"{result.depth[r].bins[i].theory_hi_pct or 0:.2f} / "
+                          f"{_value(result.depth[r].bins[i].measured_theory_hi_pct, 2)}" for r in roles)
+        ci = "/".join(f"{_value(result.depth[r].bins[i].ci_lo_pct, 2)}-{_value(result.depth[r].bins[i].ci_hi_pct, 2)}"
+                      for r in roles)
+        lines.append(text + f"| {theory} | {ci}")
     claim = ", ".join(f"{role} {_value(acc.within_3m.median_pct, 3)} % (p90 {_value(acc.within_3m.p90_pct, 3)} %, "
                       f"fill {acc.within_3m.fill_rate or 0:.0%})" for role, acc in result.depth.items())
     lines.append(f"  median |error| within 3 m, preset {result.settings.preset}: {claim}")
+    subpx = ", ".join(f"{role} {_value(acc.subpixel_rms_px, 3)} px" for role, acc in result.depth.items())
+    lines.append(f"  sub-pixel RMS measured (plane fit, Intel's definition): {subpx}; Intel's model uses 0.08 px")
     return lines
 
 
@@ -110,6 +116,10 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += ["Recovered calibration (rendered boards):", *_recovery_lines(result)]
     if result.depth:
         lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
+    if result.recording is not None:
+        from s2r.validate.recording_report import recording_lines
+
+        lines += recording_lines(result.recording)
     lines += _verdict_lines(result)
     xml = [e for e in result.edits if e.parameter == "sensor XML"]
     if xml:

@@ -99,6 +99,6 @@ def test_unreadable_file_detection_says_why(tmp_path: Path) -> None:
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"\x89PNG broken")
     det = next(detect_stream([DetectItem(name="bad.png", sha256="0" * 64, source=bad)], pattern=(9, 6)))
-    assert det.status == "unreadable" and "corrupt or empty" in det.detail and det.size is None
+    assert det.status == "unreadable" and "not a readable image" in det.detail and det.size is None
     grey = cv2.imread(str(bad), cv2.IMREAD_GRAYSCALE)
     assert grey is None

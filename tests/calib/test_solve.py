@@ -24,9 +24,13 @@ def test_coverage_grid_counts_corners_per_cell() -> None:
     # 640x480 split 8x6: cells of 80x80 px; corner (10, 10) -> cell (0, 0); (639, 479) -> (5, 7)
     cov = coverage_of([np.array([[10.0, 10.0], [639.0, 479.0], [85.0, 10.0]], np.float32)], (640, 480))
     assert cov.counts[0, 0] == 1 and cov.counts[5, 7] == 1 and cov.counts[0, 1] == 1
-    assert cov.counts.sum() == 3 and cov.fraction == pytest.approx(3 / 48)
+    # covered = the board's footprint (the triangle's area, about 7 % of the image), not 3 of 48 cells
+    assert cov.counts.sum() == 3 and cov.fraction == pytest.approx(0.5 * 629 * 75 / (640 * 480), rel=0.25)
+    assert cov.footprint is not None and cov.footprint.shape == (60, 80) and cov.footprint.max() == 1
     warnings = coverage_warnings("left", cov)
-    assert any("top-right" in w and "add views with the board near the top-right" in w for w in warnings)
+    assert len(warnings) == 1 and "top-right" in warnings[0] and "add views with the board there" in warnings[0]
+    full = coverage_of([(np.mgrid[0:9, 0:6].T.reshape(-1, 2) * [79.8, 95.8]).astype(np.float32)], (640, 480))
+    assert full.fraction > 0.98 and coverage_warnings("right", full) == []
 
 
 def test_unknown_distortion_model_is_refused() -> None:

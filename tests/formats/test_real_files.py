@@ -211,3 +211,38 @@ def test_implausible_baseline_in_squares_warns(tmp_path: Path, caplog: pytest.Lo
     with caplog.at_level("WARNING", logger="s2r"):
         assert load_any(path, t_scale_m=0.025).baseline_m == pytest.approx(0.0836, abs=1e-4)
     assert "implausible" not in caplog.text
+
+
+def test_orbslam3_rectified_realsense_settings(tmp_path: Path) -> None:
+    """UZ-SLAMLab/ORB_SLAM3 Examples/Stereo/RealSense_D435i.yaml (excerpt): Camera.type Rectified, Stereo.b."""
+    path = tmp_path / "RealSense_D435i.yaml"
+    path.write_text('%YAML:1.0\nFile.version: "1.0"\nCamera.type: "Rectified"\nCamera1.fx: 382.613\n'
+                    "Camera1.fy: 382.613\nCamera1.cx: 320.183\nCamera1.cy: 236.455\nStereo.b: 0.0499585\n"
+                    "Camera.width: 640\nCamera.height: 480\nCamera.fps: 30\nStereo.ThDepth: 40.0\n")
+    p = load_any(path)
+    assert (p.left.fx_px, p.left.cx_px, p.right.cy_px) == (382.613, 320.183, 236.455)
+    assert p.T.tolist() == [-0.0499585, 0.0, 0.0] and p.left.distortion.is_zero
+
+
+@pytest.mark.parametrize(("text", "why"), [
+    ('%YAML:1.0\nFile.version: "1.0"\nCamera.type: "PinHole"\nCamera1.fx: 500.0\nCamera1.fy: 500.0\n'
+     "Camera1.cx: 320.0\nCamera1.cy: 240.0\nCamera.width: 640\nCamera.height: 480\n", "holds one camera"),
+    ("%YAML:1.0\nimu: 1\nnum_of_cam: 1\ncam0_calib: \"cam0_pinhole.yaml\"\nimage_width: 752\nimage_height: 480\n",
+     "monocular VINS-Fusion"),
+    ("cam0:\n  camera_model: omni\n  intrinsics: [0.8, 500, 500, 320, 240]\n  distortion_model: radtan\n"
+     "  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [640, 480]\n", "a camchain with 1 camera(s) (cam0)"),
+    ("cam0:\n  camera_model: omni\n  intrinsics: [0.8, 500, 500, 320, 240]\n  distortion_model: radtan\n"
+     "  distortion_coeffs: [0, 0, 0, 0]\n  resolution: [640, 480]\ncam1:\n  camera_model: omni\n", "'omni' is not "
+     "supported"),
+    ("%YAML:1.0\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n"
+     "  dt: d\n  data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\n", "holds one camera"),
+    ("[LEFT_CAM_HD]\nfx=700\nfy=700\ncx=640\ncy=360\n[STEREO]\nBaseline=120\n", "pick a resolution"),
+    ("%YAML:1.0\nverbosity: INFO\nuse_stereo: true\nmax_cameras: 2\n", "unrecognised"),
+])
+def test_out_of_scope_files_exit_2_with_one_line(text: str, why: str, tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "in.yaml"
+    path.write_text(text)
+    assert main(["profile", "convert", str(path), "--to", "s2r", "-o", str(tmp_path / "out.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and why in err and str(path) in err, err

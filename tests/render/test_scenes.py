@@ -116,7 +116,7 @@ def test_write_scene_layout_and_refusal(rig: StereoProfile, tmp_path: Path) -> N
 def test_bad_scene_requests_name_the_field(rig: StereoProfile, kwargs: dict[str, object], field: str) -> None:
     with pytest.raises(RenderError, match=rf"^{field}: "):
         render_scene(rig, jobs=1, **kwargs)  # type: ignore[arg-type]
-    assert set(SCENES) == {"planes", "slanted", "room"}
+    assert set(SCENES) == {"planes", "slanted", "span", "room"}
 
 
 def test_gain_and_noise_change_only_the_right_image_as_asked(rig: StereoProfile) -> None:

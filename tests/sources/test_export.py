@@ -14,7 +14,7 @@ from s2r.profile import CalibrationQuality, StereoProfile
 from s2r.registry import load_profile
 from s2r.sources import load_description_profile
 from s2r.sources.conventions import opencv_to_gazebo_distortion
-from s2r.sources.gazebo_export import export_gazebo, noise_from_residual
+from s2r.sources.gazebo_export import export_gazebo
 from tests.conftest import make_rig
 
 SUFFIX = {"urdf": "urdf", "sdf": "sdf", "gz-sim": "sdf"}
@@ -109,16 +109,46 @@ def test_fx_not_fy_and_skew_warnings_state_the_error(rig: StereoProfile) -> None
     assert not any("fy" in w for w in gz_warnings)
 
 
-def test_noise_from_a_calibration_residual(rig: StereoProfile) -> None:
-    cal = CalibrationQuality(pattern=(9, 6), square_m=0.025, views_used=20, rms_stereo_px=0.005)
-    profile = rig.model_copy(update={"provenance": rig.provenance.model_copy(update={"calibration": cal})})
+def test_noise_only_from_a_sensor_noise_figure(rig: StereoProfile, tmp_path: Path) -> None:
+    """A calibration RMS is corner localisation, not sensor noise: no <noise> from it; --noise or the profile's
+    simulation.noise_stddev is written as is."""
+    cal = CalibrationQuality(pattern=(9, 6), square_m=0.025, views_used=20, rms_stereo_px=0.5)
+    profile = rig.model_copy(update={"provenance": rig.provenance.model_copy(update={"calibration": cal}),
+                                     "simulation": None})
     text, warnings = export_gazebo(profile, fmt="sdf")
-    sigma = 0.005 * math.sqrt(66) / 1.5  # 0.02708: sigma_px * C sqrt(N) / w
-    value, capped = noise_from_residual(0.005)
-    assert value == pytest.approx(sigma) and not capped
-    assert float(text.split("<stddev>")[1].split("<")[0]) == pytest.approx(sigma, rel=1e-12)
-    assert any("calibration RMS 0.005 px" in w for w in warnings)
-    assert noise_from_residual(0.2)[1] is True
+    assert "<noise>" not in text and not any("noise" in w for w in warnings)
+    text, _ = export_gazebo(profile, fmt="gz-sim", noise=0.007)
+    assert [float(t.split("<")[0]) for t in text.split("<stddev>")[1:]] == [0.007, 0.007]
+    src = dump_profile(profile, tmp_path / "p.yaml")
+    assert main(["profile", "export-gazebo", str(src), "--noise", "2", "-o", str(tmp_path / "x.sdf")]) == 2
+
+
+def test_urdf_snippet_defines_its_optical_frames_and_mount(tmp_path: Path) -> None:
+    """The plugins' frameName links exist, 90 deg turned (rpy -pi/2 0 -pi/2), and --parent-link mounts the rig;
+    a RealSense's infrared imagers are mono L8 on realsense2_camera's topics."""
+    out = tmp_path / "rs.urdf"
+    assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "urdf", "--parent-link",
+                 "base_link", "-o", str(out)]) == 0
+    import xml.etree.ElementTree as ET
+
+    robot = ET.parse(out).getroot()
+    links = {link.get("name") for link in robot.findall("link")}
+    frames = [p.findtext("frameName") for p in robot.iter("plugin")]
+    assert frames == ["camera_infra1_optical_frame", "camera_infra2_optical_frame"] and set(frames) <= links
+    joints = {j.get("name"): j for j in robot.findall("joint")}
+    optical = joints["camera_infra1_optical_frame_joint"].find("origin")
+    assert optical is not None and [float(v) for v in optical.get("rpy", "").split()] == [-math.pi / 2, 0, -math.pi / 2]
+    mount = joints["realsense_d435_848x480_mount_joint"]
+    assert mount.find("parent").get("link") == "base_link"  # type: ignore[union-attr]
+    assert [f.text for f in robot.iter("format")] == ["L8", "L8"]
+    assert [p.findtext("cameraName") for p in robot.iter("plugin")] == ["camera/infra1", "camera/infra2"]
+    assert [p.findtext("imageTopicName") for p in robot.iter("plugin")] == ["image_rect_raw"] * 2
+    gz, _ = export_gazebo(load_profile("realsense_d435_848x480"), fmt="gz-sim")
+    assert "<topic>camera/infra1/image_rect_raw</topic>" in gz and "<format>L8</format>" in gz
+    # without a parent link the snippet stands alone and reads back
+    alone = tmp_path / "alone.urdf"
+    assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "urdf", "-o", str(alone)]) == 0
+    assert load_description_profile(alone).left.frame_id == "camera_infra1_optical_frame"
 
 
 def test_cli_export_refuses_to_overwrite(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -19,6 +19,7 @@ from s2r.validate.report import EXTRA_SECTIONS, build_sections
 from s2r.validate.run import QUICK, ValidationResult, _collect_checks, _static_stages
 from s2r.validate.summary import summary_lines
 from s2r.validate.tolerances import Tolerances
+from s2r.validate.verdict import parameter_checks
 from tests.conftest import make_rig
 
 
@@ -81,3 +82,13 @@ def test_terminal_summary_groups_like_the_report() -> None:
     text = "\n".join(lines)
     assert "1. Resolution" in text and "2. Focal length / field of view" in text
     assert "also fails: left fx, left fy, right fx, right fy" in text
+
+
+def test_principal_point_cause_uses_the_pixels_images_obey() -> None:
+    # gazebo_dual_camera declares Gazebo classic's cx = 320.5: its images are centred at 319.5 (OpenCV pixels)
+    sim, real = load_profile("gazebo_dual_camera"), load_profile("realsense_d435_848x480")
+    result = ValidationResult(roles={"sim": sim, "real": real}, settings=QUICK, tolerances=Tolerances())
+    _static_stages(result, sim, real)
+    result.checks = parameter_checks(result.params)
+    (pp,) = [c for c in result.root_causes if c.key == "principal_point"]
+    assert "sim (+0.00, +0.00) px" in pp.what

@@ -1,0 +1,87 @@
+"""A verdict a user can act on: good / check / poor, with the reasons, for a stereo calibration.
+
+Each figure gets a level from fixed limits (pixels unless stated):
+
+============================  ========  =========  ==============================================
+figure                        good <=   check <=   beyond: poor
+============================  ========  =========  ==============================================
+stereo RMS reprojection       0.5       1.0
+held-out RMS (chosen model)   0.6       1.2        also "check" above 2x the fitted RMS
+epipolar RMS (rectified)      0.5       1.0
+baseline std / baseline       0.5 %     2 %
+board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
+============================  ========  =========  ==============================================
+
+A better lens model on held-out views, unobservable parameters and dropped mismatched pairs make it at
+least "check". The verdict is the worst level.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+__all__ = ["Reason", "Verdict", "stereo_verdict"]
+
+Level = Literal["good", "check", "poor"]
+_ORDER = {"good": 0, "check": 1, "poor": 2}
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One judged figure: its level and a plain-language line."""
+
+    level: Level
+    text: str
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The overall level (the worst reason's) and every reason."""
+
+    level: Level
+    reasons: tuple[Reason, ...]
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready form."""
+        return {"level": self.level, "reasons": [{"level": r.level, "text": r.text} for r in self.reasons]}
+
+
+def _grade(value: float, good: float, check: float) -> Level:
+    if not np.isfinite(value):
+        return "check"
+    return "good" if value <= good else "check" if value <= check else "poor"
+
+
+def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: float, baseline_m: float,
+                   baseline_std_m: float | None, coverage: Sequence[float], model_warning: str | None = None,
+                   unobservable: Sequence[str] = (), mismatched: int = 0) -> Verdict:
+    """Judge a stereo calibration from its figures (see the module table)."""
+    reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"stereo RMS reprojection error {rms_px:.3f} px")]
+    if heldout_px is not None:
+        level = _grade(heldout_px, 0.6, 1.2)
+        if level == "good" and heldout_px > 2 * rms_px:
+            level = "check"
+        reasons.append(Reason(level, f"held-out error {heldout_px:.3f} px (views left out of the fit)"))
+    reasons.append(Reason(_grade(epipolar_px, 0.5, 1.0), f"epipolar RMS after rectification {epipolar_px:.3f} px"))
+    if baseline_std_m is None:
+        reasons.append(Reason("check", "baseline uncertainty unknown"))
+    else:
+        rel = 100 * baseline_std_m / baseline_m
+        reasons.append(Reason(_grade(rel, 0.5, 2.0), f"baseline {baseline_m * 1000:.2f} mm, std "
+                                                      f"{baseline_std_m * 1000:.3g} mm ({rel:.2g} %)"))
+    worst = min(coverage) if coverage else 0.0
+    cov_level: Level = "good" if worst >= 0.5 else "check" if worst >= 0.2 else "poor"
+    reasons.append(Reason(cov_level, "boards cover " + " / ".join(f"{100 * c:.0f} %" for c in coverage)
+                          + " of the image" + ("" if cov_level == "good" else "; add views near the edges")))
+    if model_warning:
+        reasons.append(Reason("check", model_warning))
+    if unobservable:
+        reasons.append(Reason("check", f"not observable from these views: {', '.join(unobservable)}"))
+    if mismatched:
+        reasons.append(Reason("check", f"{mismatched} mismatched pair(s) dropped"))
+    level = max((r.level for r in reasons), key=lambda lv: _ORDER[lv])
+    return Verdict(level, tuple(reasons))

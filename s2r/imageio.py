@@ -1,0 +1,90 @@
+"""Reading image files through OpenCV in s2r's own words (the one place image files are decoded).
+
+OpenCV's own log (``[ WARN:0@0.04] global grfmt_png.cpp ...``) is silenced when this module is imported, and
+the messages libpng and libjpeg print straight to the process's stderr ("libpng error: IDAT: CRC error",
+"Premature end of JPEG file") are kept off the terminal while a file decodes. Instead the caller gets a
+reason in plain words: not an image, truncated, or corrupt. A truncated JPEG that OpenCV would decode into
+a half-grey image is refused.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["decode_image_file", "silence_opencv_log"]
+
+_PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
+_LOCK = threading.Lock()
+_STATE = {"depth": 0, "saved_fd": -1}
+
+
+def silence_opencv_log() -> None:
+    """Silence OpenCV's own logging (its C++ warnings and errors); s2r reports failures itself."""
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+
+
+silence_opencv_log()
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """Point file descriptor 2 at /dev/null while native decoders run (nested and thread-safe, per process)."""
+    with _LOCK:
+        if _STATE["depth"] == 0:
+            with contextlib.suppress(AttributeError, ValueError, OSError):
+                sys.stderr.flush()
+            _STATE["saved_fd"] = os.dup(2)
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, 2)
+            os.close(null)
+        _STATE["depth"] += 1
+    try:
+        yield
+    finally:
+        with _LOCK:
+            _STATE["depth"] -= 1
+            if _STATE["depth"] == 0:
+                os.dup2(_STATE["saved_fd"], 2)
+                os.close(_STATE["saved_fd"])
+
+
+def _truncated(data: bytes) -> str:
+    """Why ``data`` is a truncated PNG or JPEG ('' when complete or another format)."""
+    if data.startswith(_PNG_MAGIC) and b"IEND" not in data[-16:]:
+        return "truncated PNG (no IEND chunk at the end: the file was cut short)"
+    if data.startswith(_JPEG_MAGIC) and b"\xff\xd9" not in data[-64:]:
+        return "truncated JPEG (no end-of-image marker: the file was cut short)"
+    return ""
+
+
+def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tuple[NDArray[Any] | None, str]:
+    """``(image, "")`` for a readable image file, else ``(None, reason in plain words)``.
+
+    ``flags`` as ``cv2.imdecode`` (``cv2.IMREAD_GRAYSCALE`` for (H, W) uint8). Nothing is printed.
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return None, f"cannot read the file ({exc.strerror or exc})"
+    if not data:
+        return None, "the file is empty"
+    reason = _truncated(data)
+    if reason:
+        return None, reason
+    with _native_stderr_silenced():
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), flags)
+    if image is None:
+        kind = "PNG" if data.startswith(_PNG_MAGIC) else "JPEG" if data.startswith(_JPEG_MAGIC) else ""
+        return None, f"corrupt {kind} image data" if kind else "not an image file OpenCV can read"
+    return np.asarray(image), ""
