@@ -45,6 +45,7 @@ from s2r.calib.targetcal import (
     solve_pair,
     to_camera,
 )
+from s2r.calib.verdict import stereo_verdict
 from s2r.calib.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
@@ -273,11 +274,22 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         log.warning("%s", w)
     view_errors = [ViewError(joint_obs[i].name, float(e[0]), float(e[1]), float(e[2]), used=True)
                    for i, e in zip(sol.keep, sol.per_view, strict=True)]
+    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None, epipolar_px=epi, baseline_m=profile.baseline_m,
+                             baseline_std_m=profile.extrinsics.baseline_std_m,
+                             coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable)
+    # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
+    # solve's residuals, as the report draws them
+    empty = np.zeros((0, 2))
+    seen = [(joint_obs[i].left, joint_obs[i].right) for i in sol.keep]
+    aligned = replace(sol, residuals=tuple((empty if r[0] is None else r[0], empty if r[1] is None else r[1])
+                                           for r in sol.residuals))
     return StereoCalibration(
         profile=profile, views=tuple(view_errors + outliers), dropped=tuple(dropped), threshold_px=sol.threshold_px,
         coverage_left=cov_l, coverage_right=cov_r, spread=spread, epipolar_rms_px=epi, warnings=tuple(warnings),
-        used_names=tuple(v.name for v in pv), corners_left=tuple(v.left for v in pv),
-        corners_right=tuple(v.right for v in pv), reordered=tuple(reordered), solution=sol)
+        used_names=tuple(joint_obs[i].name for i in sol.keep),
+        corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
+        corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
+        reordered=tuple(reordered), solution=aligned, verdict=verdict)
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
