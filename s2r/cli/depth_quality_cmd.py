@@ -11,11 +11,18 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, parse_pattern, print_json
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_json,
+    argparse_type,
+    load_profile,
+    parse_pattern,
+    print_json,
+)
 from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
 from s2r.fileio import check_output_free, prepare_output_dir
-from s2r.registry import load_profile
 
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
