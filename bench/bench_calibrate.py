@@ -11,6 +11,11 @@ s2r: calibrate_stereo(..., jobs=2) with a fresh corner cache, then the same call
 Memory: peak RSS (resource.getrusage maxrss) of a subprocess calibrating 500 pairs (the 100 pairs linked
 five times under new names, cache off), main process and largest worker.
 
+Detection only (the issue-11 figure): the plain single-process loop (imread, findChessboardCorners with
+FAST_CHECK, cornerSubPix) against s2r's detection stream (first run, no cache, --jobs processes), boards
+found by each, on the set above and on a set with a board in every view (--full-pairs, default 40).
+Whole runs (detection + solve): s2r's includes the joint solve and the held-out model comparison.
+
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
 """
@@ -30,6 +35,7 @@ import cv2
 import numpy as np
 
 from s2r.calib import calibrate_stereo
+from s2r.calib.detect import DetectItem, detect_stream
 from s2r.calib.synth import write_stereo_set
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, StereoProfile
 
@@ -88,6 +94,38 @@ def plain_opencv(left: list[Path], right: list[Path], *, fast_check: bool) -> tu
                      "fx_r": K2[0, 0], "baseline_mm": 1000 * float(np.linalg.norm(T)), "views": len(pts_l)}
 
 
+def plain_detect(paths: list[Path]) -> tuple[float, int]:
+    """Single-process plain OpenCV detection: imread, findChessboardCorners with FAST_CHECK, cornerSubPix."""
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
+    t0 = time.perf_counter()
+    found = 0
+    for p in paths:
+        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+        ok, c = cv2.findChessboardCorners(img, PATTERN, flags=flags)
+        if ok:
+            cv2.cornerSubPix(img, c, (11, 11), (-1, -1), crit)
+            found += 1
+    return time.perf_counter() - t0, found
+
+
+def s2r_detect(paths: list[Path], jobs: int) -> tuple[float, int]:
+    """s2r's detection stream (first run: no cache), ``jobs`` processes."""
+    items = (DetectItem(name=p.name, sha256=str(p), source=p) for p in paths)
+    t0 = time.perf_counter()
+    found = sum(d.status == "ok" for d in detect_stream(items, pattern=PATTERN, jobs=jobs))
+    return time.perf_counter() - t0, found
+
+
+def detection_table(sets: dict[str, list[Path]], jobs: int) -> None:
+    print(f"{'detection only':<34} {'plain+FAST_CHECK (1 proc)':>26} {f's2r (jobs {jobs})':>18} {'speed-up':>9}")
+    for label, paths in sets.items():
+        t_plain, n_plain = plain_detect(paths)
+        t_s2r, n_s2r = s2r_detect(paths, jobs)
+        print(f"{label:<34} {t_plain:8.2f} s {n_plain:4d} boards     {t_s2r:7.2f} s {n_s2r:4d} boards "
+              f"{t_plain / t_s2r:6.2f}x")
+
+
 def s2r_run(left: list[Path], right: list[Path], cache: Path, jobs: int) -> tuple[float, dict[str, float]]:
     t0 = time.perf_counter()
     result = calibrate_stereo(left, right, pattern=PATTERN, square_m=SQUARE, jobs=jobs, cache_dir=cache)
@@ -103,6 +141,7 @@ _MEMORY_CHILD = """
 import resource, sys
 from pathlib import Path
 from s2r.calib import calibrate_stereo
+from s2r.calib.detect import DetectItem, detect_stream
 left = sorted(Path(sys.argv[1], "left").glob("*.png")); right = sorted(Path(sys.argv[1], "right").glob("*.png"))
 r = calibrate_stereo(left, right, jobs=int(sys.argv[2]))
 print(len(left), r.profile.provenance.calibration.views_detected,
@@ -139,9 +178,13 @@ def main() -> None:
     parser.add_argument("--blank", type=int, default=20)
     parser.add_argument("--memory-pairs", type=int, default=500)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--full-pairs", type=int, default=40, help="pairs of the set with a board in every view")
     args = parser.parse_args()
     truth = bench_rig()
     left, right = dataset(args.pairs, args.blank)
+    full_l, full_r = dataset(args.full_pairs, 0)
+    detection_table({f"{args.pairs} pairs, {args.blank} without board": left + right,
+                     f"{args.full_pairs} pairs, a board in every view": full_l + full_r}, args.jobs)
     print(f"{args.pairs} pairs 1280x720 ({args.blank} without a board), jobs={args.jobs}, {os.cpu_count()} cores; "
           f"errors against the known rig (fx {truth.left.fx_px:.2f}, B {1000 * truth.baseline_m:.1f} mm)")
     t_plain, f_plain = plain_opencv(left, right, fast_check=False)

@@ -91,6 +91,11 @@ def load_profile(name_or_path: str | Path | None = None) -> StereoProfile:
     A path may be any format :func:`s2r.formats.detect.load_any` reads from one file (s2r YAML, Kalibr,
     OpenCV FileStorage with R and T, rs-enumerate-devices text, a folder with ROS left.yaml/right.yaml).
     """
+    path = resolve_profile(name_or_path)
+    if path.resolve().is_relative_to(SHIPPED_PROFILES.resolve()):
+        from s2r.formats.s2r_yaml import load_profile_file  # shipped profiles are s2r YAML: no format detection
+
+        return load_profile_file(path)
     from s2r.formats.detect import load_any
 
-    return load_any(resolve_profile(name_or_path))
+    return load_any(path)

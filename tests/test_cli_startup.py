@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -30,10 +31,13 @@ def test_importing_the_cli_loads_no_heavy_library() -> None:
     assert _loaded_after("import s2r.cli") == []
 
 
-def test_profile_show_and_list_load_no_heavy_library() -> None:
+def test_profile_show_list_convert_load_no_heavy_library(tmp_path: Path) -> None:
+    out = tmp_path / "camchain.yaml"
     code = ("from s2r.cli import main\nimport contextlib, io\nwith contextlib.redirect_stdout(io.StringIO()):\n"
-            "    main(['profile', 'show', 'realsense_d435_848x480']); main(['profile', 'list'])")
+            "    main(['profile', 'show', 'realsense_d435_848x480']); main(['profile', 'list'])\n"
+            f"    main(['profile', 'convert', 'realsense_d435_848x480', '--to', 'kalibr', '-o', {str(out)!r}])")
     assert _loaded_after(code) == []
+    assert out.is_file()
 
 
 def test_parser_choices_match_the_library() -> None:

@@ -45,6 +45,7 @@ from s2r.calib.targetcal import (
     solve_pair,
     to_camera,
 )
+from s2r.calib.verdict import stereo_verdict
 from s2r.calib.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
@@ -123,8 +124,8 @@ def _stereo_rounds(views: list[PairView], fit_l: MonoFit, fit_r: MonoFit, size: 
 
 
 def _mono_fits(obs_l: list[Observation | None], obs_r: list[Observation | None], size: tuple[int, int], *,
-               lens: str, distortion: str, max_error_px: float | None, dropped: list[DroppedView]
-               ) -> tuple[list[MonoFit], list[dict[int, int]]]:
+               lens: str, distortion: str, max_error_px: float | None, dropped: list[DroppedView],
+               prune: bool = True) -> tuple[list[MonoFit], list[dict[int, int]]]:
     """Each camera on every view it saw (outlier views and corners removed, written back into ``obs_*``);
     returns the fits and, per camera, view index -> position in the fit's kept views."""
     fits, keeps = [], []
@@ -132,7 +133,7 @@ def _mono_fits(obs_l: list[Observation | None], obs_r: list[Observation | None],
         index = [k for k, o in enumerate(obs) if o is not None]
         if len(index) < MIN_VIEWS:
             raise too_few_error(len(index), dropped, what=f"{side} images")
-        fit = fit_camera(CameraViews([obs[k] for k in index], size, lens, distortion),  # type: ignore[misc]
+        fit = fit_camera(CameraViews([obs[k] for k in index], size, lens, distortion, prune),  # type: ignore[misc]
                          max_error_px=max_error_px, camera=side)
         for j, k in enumerate(index):
             obs[k] = fit.views[j]
@@ -160,7 +161,8 @@ def calibrate_stereo_target_detections(
     dropped = [*extra_dropped, *_skipped([dl for _, dl, _ in pairs], obs_l),
                *_skipped([dr for _, _, dr in pairs], obs_r)]
     (fit_l, fit_r), keeps = _mono_fits(obs_l, obs_r, size, lens=lens, distortion=distortion,
-                                       max_error_px=max_error_px, dropped=dropped)
+                                       max_error_px=max_error_px, dropped=dropped,
+                                       prune=not isinstance(target, CheckerboardTarget))
     views, reordered = pair_views(names, obs_l, obs_r, keeps[0], keeps[1], target)
     if len(views) < MIN_VIEWS:
         raise too_few_error(len(views), dropped)
@@ -272,11 +274,22 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         log.warning("%s", w)
     view_errors = [ViewError(joint_obs[i].name, float(e[0]), float(e[1]), float(e[2]), used=True)
                    for i, e in zip(sol.keep, sol.per_view, strict=True)]
+    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None, epipolar_px=epi, baseline_m=profile.baseline_m,
+                             baseline_std_m=profile.extrinsics.baseline_std_m,
+                             coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable)
+    # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
+    # solve's residuals, as the report draws them
+    empty = np.zeros((0, 2))
+    seen = [(joint_obs[i].left, joint_obs[i].right) for i in sol.keep]
+    aligned = replace(sol, residuals=tuple((empty if r[0] is None else r[0], empty if r[1] is None else r[1])
+                                           for r in sol.residuals))
     return StereoCalibration(
         profile=profile, views=tuple(view_errors + outliers), dropped=tuple(dropped), threshold_px=sol.threshold_px,
         coverage_left=cov_l, coverage_right=cov_r, spread=spread, epipolar_rms_px=epi, warnings=tuple(warnings),
-        used_names=tuple(v.name for v in pv), corners_left=tuple(v.left for v in pv),
-        corners_right=tuple(v.right for v in pv), reordered=tuple(reordered), solution=sol)
+        used_names=tuple(joint_obs[i].name for i in sol.keep),
+        corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
+        corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
+        reordered=tuple(reordered), solution=aligned, verdict=verdict)
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
@@ -390,7 +403,8 @@ def calibrate_mono_target(
     if len(index) < MIN_VIEWS:
         raise too_few_error(len(index), skipped, what="images")
     views = [o for o in obs if o is not None]
-    fit = fit_camera(CameraViews(views, size, lens, distortion), max_error_px=max_error_px, camera="the")
+    fit = fit_camera(CameraViews(views, size, lens, distortion, not isinstance(target, CheckerboardTarget)),
+                     max_error_px=max_error_px, camera="the")
     used = [views[i] for i in fit.keep]
     cov = coverage_of([v.img for v in views], size)
     spread = centred_spread(fit.solution, used, target, size)

@@ -115,6 +115,8 @@ class CameraViews:
     size: tuple[int, int]
     lens: str
     distortion: str
+    #: drop single outlier corners (boards identified corner by corner; a chessboard keeps its full grid)
+    prune_corners: bool = True
 
 
 def _solve(cv: CameraViews, keep: Sequence[int]) -> tuple[MonoSolution, NDArray[np.float64] | None]:
@@ -143,7 +145,7 @@ def fit_camera(cv: CameraViews, *, max_error_px: float | None, camera: str) -> M
                      for j in bad]
         keep = [k for j, k in enumerate(keep) if j not in set(bad)]
     assert thr is not None
-    pruned = _prune_corners(cv, keep, sol)
+    pruned = _prune_corners(cv, keep, sol) if cv.prune_corners else None
     if pruned is not None:
         cv.views[:] = pruned
         sol, cov = _solve(cv, keep)

@@ -75,10 +75,16 @@ class OpenCVStereo:
 
 
 #: Other names the same stereo nodes go by (OpenCV's stereoCalibrate argument names, tutorials' K1 D1 K2 D2).
-_ALIASES: dict[str, tuple[str, ...]] = {"M1": ("K1", "cameraMatrix1", "CM1", "camera_matrix_left"),
-                                        "M2": ("K2", "cameraMatrix2", "CM2", "camera_matrix_right"),
-                                        "D1": ("distCoeffs1", "dist_coeffs_left"), "D2": ("distCoeffs2",
-                                                                                          "dist_coeffs_right")}
+_ALIASES: dict[str, tuple[str, ...]] = {
+    "M1": ("K1", "cameraMatrix1", "CM1", "camera_matrix_left", "cameraMatrixLeft", "cameraMatrixL", "K_left", "KL",
+           "left_camera_matrix", "mtxL", "mtx_left"),
+    "M2": ("K2", "cameraMatrix2", "CM2", "camera_matrix_right", "cameraMatrixRight", "cameraMatrixR", "K_right", "KR",
+           "right_camera_matrix", "mtxR", "mtx_right"),
+    "D1": ("distCoeffs1", "dist_coeffs_left", "distCoeffsLeft", "distCoeffsL", "D_left", "DL", "left_distortion",
+           "distL", "dist_left"),
+    "D2": ("distCoeffs2", "dist_coeffs_right", "distCoeffsRight", "distCoeffsR", "D_right", "DR", "right_distortion",
+           "distR", "dist_right"),
+}
 
 
 def _with_aliases(nodes: dict[str, NodeValue | None]) -> dict[str, NodeValue | None]:

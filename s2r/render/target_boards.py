@@ -34,6 +34,7 @@ TEXELS = 120
 #: Share of a cut view's corners that must stay inside each image (the rest is cut by the edge).
 CUT_VISIBLE = (0.3, 0.8)
 _EDGE_PX = 3.0
+_CUT_DIRECTIONS = 16
 
 
 @dataclass(frozen=True)
@@ -93,10 +94,11 @@ def _aprilgrid(t: AprilGridTarget) -> TargetLayout:
     T = np.diag([1.0, -1.0, -1.0, 1.0])
     T[1, 3] = height
     pad = (gap + margin) * texel
-    cols, rows = 2 * t.tagCols, 2 * t.tagRows
     width = (t.tagCols - 1) * step + t.tagSize
-    spacing = min(width / (cols - 1), height / (rows - 1))
-    geometry = BoardGeometry((cols, rows), spacing, max(0.0, pad / spacing - 1.0))
+    # the pose sampler keeps its "squares" >= 12 px: a third of a tag keeps tags >= 36 px, which decode
+    spacing = t.tagSize / 3.0
+    grid = (int(np.ceil(width / spacing)) + 1, int(np.ceil(height / spacing)) + 1)
+    geometry = BoardGeometry(grid, spacing, max(0.0, pad / spacing - 1.0))
     return TargetLayout(_grey(tex), (-pad, -pad, width + pad, height + pad), T, geometry)
 
 
@@ -130,6 +132,24 @@ def _visible_share(profile: StereoProfile, corners: FloatArray, T: FloatArray) -
     return share
 
 
+def _cut(profile: StereoProfile, corners: FloatArray, T: FloatArray, rng: np.random.Generator) -> FloatArray:
+    """``T`` moved sideways until 30-80 % of the corners stay in both images (directions tried at random);
+    ``T`` itself when no direction gets there."""
+    size = float(np.ptp(corners[:, 0]) + np.ptp(corners[:, 1]))
+    for _ in range(_CUT_DIRECTIONS):
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        direction = np.array([np.cos(angle), np.sin(angle), 0.0])
+        for step in np.linspace(0.02, 1.2, 60) * size:
+            moved = T.copy()
+            moved[:3, 3] = T[:3, 3] + step * direction
+            s = _visible_share(profile, corners, moved)
+            if CUT_VISIBLE[0] <= s <= CUT_VISIBLE[1]:
+                return moved
+            if s < CUT_VISIBLE[0]:
+                break
+    return T
+
+
 def cut_views(profile: StereoProfile, poses: list[FloatArray], corners: FloatArray, *, share: float,
               seed: int) -> tuple[list[FloatArray], list[bool]]:
     """Move about ``share`` of the views sideways (in the left camera's image plane, away from the image centre)
@@ -143,17 +163,7 @@ def cut_views(profile: StereoProfile, poses: list[FloatArray], corners: FloatArr
             out.append(T)
             cut.append(False)
             continue
-        angle = rng.uniform(0.0, 2.0 * np.pi)
-        direction = np.array([np.cos(angle), np.sin(angle), 0.0])
-        size = float(np.ptp(corners[:, 0]) + np.ptp(corners[:, 1]))
-        best = T
-        for step in np.linspace(0.05, 1.0, 40) * size:
-            moved = T.copy()
-            moved[:3, 3] = T[:3, 3] + step * direction
-            s = _visible_share(profile, corners, moved)
-            if CUT_VISIBLE[0] <= s <= CUT_VISIBLE[1]:
-                best = moved
-                break
+        best = _cut(profile, corners, T, rng)
         out.append(best)
         cut.append(best is not T)
     return out, cut

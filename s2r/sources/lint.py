@@ -292,7 +292,8 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
         _focal_rules(report, camera)
     for severity, code, message, fix, line, needles in baseline_findings(description, pair):
         report.add(severity, code, message, fix, line, *needles)
-    _profile_rule(report, description, pair)
+    if not any(f.severity == "error" and f.code.startswith("baseline-") for f in report.findings):
+        _profile_rule(report, description, pair)  # a baseline error is the cause already named
     _pair_rules(report, pair)
     _hack_rules(report, pair)
     _clip_rules(report, pair)

@@ -6,6 +6,7 @@ the same distance straight along the left camera's image x axis, keeping the rig
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -66,7 +67,12 @@ def rectified_area_kept(description: Description, pair: StereoPair) -> tuple[flo
     from s2r.rectification import stereo_rectification
     from s2r.sources.profile_builder import profile_from_pair
 
-    profile = profile_from_pair(description, pair, convention="exact")
+    builder_log = logging.getLogger("s2r.sources.profile_builder")
+    was_disabled, builder_log.disabled = builder_log.disabled, True  # its lens warnings are not about this area
+    try:
+        profile = profile_from_pair(description, pair, convention="exact")
+    finally:
+        builder_log.disabled = was_disabled
     baseline = profile.baseline_m
     ideal = profile.model_copy(update={"extrinsics": profile.extrinsics.model_copy(
         update={"translation_m": tuple((-profile.R @ np.array([baseline, 0.0, 0.0])).tolist())})})

@@ -20,7 +20,7 @@ def test_real_set_depth_on_the_board(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["-q", "calibrate", str(data), "-o", str(profile), "--jobs", "2", "--json"]) == 0
     capsys.readouterr()
     code = main(["-q", "depth-quality", str(profile), "--left", str(data / "left0[678].jpg"), "--right",
-                 str(data / "right0[678].jpg"), "--pattern", "9x6", "--square", "0.025", "--num-disparities", "208",
+                 str(data / "right0[678].jpg"), "--pattern", "9x6", "--square", "0.025", "--num-disparities", "256",
                  "--json"])
     assert code == 0
     frames = json.loads(capsys.readouterr().out)["frames"]
