@@ -35,7 +35,7 @@ from s2r.sources.xacro_sandbox import UnsafeXacro, check_expression
 from tests.formats.rigs import distorted_rotated_rig
 from tests.sources.rigs import XBOT_SDF, two_camera_urdf
 
-FUZZ = settings(max_examples=25, deadline=None, derandomize=True, database=None,
+FUZZ = settings(max_examples=15, deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 RIG = distorted_rotated_rig()
 _LEFT, _RIGHT = ros_pair_from_profile(RIG)
