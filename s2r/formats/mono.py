@@ -13,7 +13,6 @@ import numpy as np
 import yaml
 
 from s2r.fileio import atomic_write_text, read_text_file
-from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml
 from s2r.profile import MonoProfile
 
 __all__ = ["dump_mono", "is_mono_profile_file", "mono_to_kalibr_yaml", "mono_to_ros_yaml"]
@@ -33,6 +32,8 @@ def is_mono_profile_file(path: str | Path) -> bool:
 
 def mono_to_ros_yaml(profile: MonoProfile) -> str:
     """camera_calibration_parsers YAML of the camera: its K and D, ``R = I``, ``P = [K | 0]``."""
+    from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml  # local: profile show needs no ROS module
+
     cam = profile.camera
     P = np.hstack([cam.K, np.zeros((3, 1))])
     info = RosCameraInfo(camera_name=profile.name, width=cam.width_px, height=cam.height_px, K=cam.K, D=cam.D,
