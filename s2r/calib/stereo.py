@@ -138,6 +138,10 @@ def make_camera(K: NDArray[np.float64], D: NDArray[np.float64], size: tuple[int,
     def sd(v: float) -> float | None:  # unobservable (inf / NaN) is None, never a NaN the profile rejects
         return float(v) if np.isfinite(v) else None
 
+    if max(abs(c) for c in coefs) > 1000:
+        raise CalibrationError(f"the {distortion} lens model is degenerate on these views (a coefficient of "
+                               f"{max(coefs, key=abs):.4g})", field="--distortion",
+                               hint="use a model with fewer terms, e.g. --distortion k1k2p1p2")
     return Camera(
         width_px=size[0], height_px=size[1], fx_px=float(K[0, 0]), fy_px=float(K[1, 1]),
         cx_px=float(K[0, 2]), cy_px=float(K[1, 2]),
