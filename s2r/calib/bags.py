@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
 from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
-from s2r.errors import CalibrationError
+from s2r.errors import CalibrationError, S2RError
 from s2r.fileio import sha256_file
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
@@ -32,7 +32,7 @@ from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
 
 AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 
-__all__ = ["BagFrame", "bag_image_topics", "calibrate_stereo_bag", "paired_bag_frames"]
+__all__ = ["BagFrame", "bag_image_topics", "calibrate_stereo_bag", "open_bag", "paired_bag_frames"]
 
 log = logging.getLogger(__name__)
 IMAGE_TYPES = frozenset({"sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"})
@@ -49,17 +49,18 @@ class BagFrame:
     image: NDArray[np.uint8]
 
 
-def _reader(bag: Path) -> Any:
+def open_bag(bag: Path, *, error: type[S2RError] = CalibrationError) -> Any:
+    """An open rosbags ``AnyReader`` on a ROS 1 or ROS 2 bag; a missing or unreadable bag raises ``error``."""
     from rosbags.highlevel import AnyReader
 
     if not bag.exists():
-        raise CalibrationError("bag not found", path=bag, hint="check the path (a ROS 2 bag is a folder)")
+        raise error("bag not found", path=bag, hint="check the path (a ROS 2 bag is a folder)")
     try:
         reader = AnyReader([bag])
         reader.open()
     except Exception as exc:  # rosbags raises several unrelated types for unreadable bags
-        raise CalibrationError(f"cannot read the bag: {exc}", path=bag,
-                               hint="pass a ROS 1 .bag file or a ROS 2 bag folder (sqlite3 or mcap)") from None
+        raise error(f"cannot read the bag: {exc}", path=bag,
+                    hint="pass a ROS 1 .bag file or a ROS 2 bag folder (sqlite3 or mcap)") from None
     return reader
 
 
@@ -149,7 +150,7 @@ def calibrate_stereo_bag(
         no pairs within ``max_dt_s``, or the usual calibration input errors.
     """
     bag = Path(bag)
-    reader = _reader(bag)
+    reader = open_bag(bag)
     samples: dict[str, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = {}
     names: list[str] = []
     try:

@@ -17,13 +17,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.bags import bag_image_topics, open_bag
 from s2r.errors import DepthError
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, depth_from_array
 
 __all__ = ["BagPair", "bag_pairs", "decode_depth", "decode_image"]
 
 BagPair = tuple[str, Any, Any]  # (name, left payload, other payload)
-_IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
 
 
 def decode_image(msg: Any, msgtype: str) -> NDArray[np.uint8]:
@@ -54,26 +54,12 @@ def decode_depth(msg: Any, msgtype: str, *, scale_m: float = DEFAULT_DEPTH_SCALE
     return depth_from_array(np.asarray(message_to_cvimage(msg)), scale_m=scale_m, name=name)
 
 
-def _open(bag: Path) -> Any:
-    from rosbags.highlevel import AnyReader
-
-    if not bag.exists():
-        raise DepthError("bag not found", path=bag, hint="check the path (a ROS 2 bag is a folder)")
-    try:
-        reader = AnyReader([bag])
-        reader.open()
-    except Exception as exc:  # rosbags raises several unrelated types for unreadable bags
-        raise DepthError(f"cannot read the bag: {exc}", path=bag,
-                         hint="pass a ROS 1 .bag file or a ROS 2 bag folder (sqlite3 or mcap)") from None
-    return reader
-
-
 def _check(reader: Any, bag: Path, topics: dict[str, str]) -> None:
-    found = {c.topic for c in reader.connections if c.msgtype in _IMAGE_TYPES}
+    found = bag_image_topics(reader)
     for flag, topic in topics.items():
         if topic not in found:
             raise DepthError(f"no image topic {topic!r} in the bag; its image topics: "
-                             f"{', '.join(sorted(found)) or 'none'}", path=bag, field=flag,
+                             f"{', '.join(found) or 'none'}", path=bag, field=flag,
                              hint="pass one of the listed topics")
 
 
@@ -81,7 +67,7 @@ def bag_pairs(bag: Path, left_topic: str, other_topic: str, *, other_flag: str, 
               ) -> Iterator[tuple[str, tuple[Any, str], tuple[Any, str]]]:
     """Yield ``(name, (left msg, type), (other msg, type))`` for messages whose stamps differ <= ``max_dt_s``."""
     bag = Path(bag)
-    reader = _open(bag)
+    reader = open_bag(bag, error=DepthError)
     try:
         _check(reader, bag, {"--left-topic": left_topic, other_flag: other_topic})
         buffers: dict[str, deque[tuple[float, Any, str]]] = {left_topic: deque(), other_topic: deque()}
