@@ -11,10 +11,14 @@ s2r: calibrate_stereo(..., jobs=2) with a fresh corner cache, then the same call
 Memory: peak RSS (resource.getrusage maxrss) of a subprocess calibrating 500 pairs (the 100 pairs linked
 five times under new names, cache off), main process and largest worker.
 
-Detection only (the issue-11 figure): the plain single-process loop (imread, findChessboardCorners with
-FAST_CHECK, cornerSubPix) against s2r's detection stream (first run, no cache, --jobs processes), boards
-found by each, on the set above and on a set with a board in every view (--full-pairs, default 40).
-Whole runs (detection + solve): s2r's includes the joint solve and the held-out model comparison.
+First-run table (the issue-11 figure), on the set above and on a set with a board in every view
+(--full-pairs, default 40), each measured --repeats times with plain and s2r interleaved (the machine is
+shared, so the median of the repeats and the ratio of the medians are printed):
+- detection only: the plain single-process loop (imread, findChessboardCorners with FAST_CHECK,
+  cornerSubPix 11x11) against s2r's detection stream (no cache, --jobs processes), boards found by each;
+- whole run: the plain loop plus calibrateCamera per camera and stereoCalibrate (k1 k2 p1 p2, k3 fixed, as
+  s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
+  detection, checks, the joint solve and the held-out model comparison).
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
@@ -67,8 +71,9 @@ def dataset(pairs: int, blank: int) -> tuple[list[Path], list[Path]]:
     return sorted((folder / "left").glob("*.png")), sorted((folder / "right").glob("*.png"))
 
 
-def plain_opencv(left: list[Path], right: list[Path], *, fast_check: bool) -> tuple[float, dict[str, float]]:
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | (cv2.CALIB_CB_FAST_CHECK * fast_check)
+def plain_opencv(left: list[Path], right: list[Path], *, fast_check: bool,
+                 flags: int = K1K2) -> tuple[float, dict[str, float]]:
+    find = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | (cv2.CALIB_CB_FAST_CHECK * fast_check)
     crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
     objp = np.zeros((PATTERN[0] * PATTERN[1], 3), np.float32)
     objp[:, :2] = np.mgrid[0:PATTERN[0], 0:PATTERN[1]].T.reshape(-1, 2) * SQUARE
@@ -78,17 +83,17 @@ def plain_opencv(left: list[Path], right: list[Path], *, fast_check: bool) -> tu
         found = []
         for p in (pl, pr):
             img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-            ok, c = cv2.findChessboardCorners(img, PATTERN, flags=flags)
+            ok, c = cv2.findChessboardCorners(img, PATTERN, flags=find)
             found.append(cv2.cornerSubPix(img, c, (11, 11), (-1, -1), crit) if ok else None)
         if found[0] is not None and found[1] is not None:
             pts_l.append(found[0])
             pts_r.append(found[1])
     size = (1280, 720)
     objs = [objp] * len(pts_l)
-    _, K1, D1, _, _ = cv2.calibrateCamera(objs, pts_l, size, None, None, flags=K1K2)
-    _, K2, D2, _, _ = cv2.calibrateCamera(objs, pts_r, size, None, None, flags=K1K2)
+    _, K1, D1, _, _ = cv2.calibrateCamera(objs, pts_l, size, None, None, flags=flags)
+    _, K2, D2, _, _ = cv2.calibrateCamera(objs, pts_r, size, None, None, flags=flags)
     _, K1, D1, K2, D2, _R, T, _, _ = cv2.stereoCalibrate(objs, pts_l, pts_r, K1, D1, K2, D2, size,
-                                                        flags=cv2.CALIB_FIX_INTRINSIC | K1K2)
+                                                        flags=cv2.CALIB_FIX_INTRINSIC | flags)
     elapsed = time.perf_counter() - t0
     return elapsed, {"fx": K1[0, 0], "fy": K1[1, 1], "cx": K1[0, 2], "cy": K1[1, 2],
                      "fx_r": K2[0, 0], "baseline_mm": 1000 * float(np.linalg.norm(T)), "views": len(pts_l)}
@@ -109,21 +114,49 @@ def plain_detect(paths: list[Path]) -> tuple[float, int]:
     return time.perf_counter() - t0, found
 
 
+def plain_whole(left: list[Path], right: list[Path]) -> tuple[float, int]:
+    """The plain loop with FAST_CHECK, then calibrateCamera per camera and stereoCalibrate (k3 fixed)."""
+    t0 = time.perf_counter()
+    _, fig = plain_opencv(left, right, fast_check=True, flags=cv2.CALIB_FIX_K3)
+    return time.perf_counter() - t0, int(fig["views"])
+
+
+def s2r_whole(left: list[Path], right: list[Path], jobs: int) -> tuple[float, int]:
+    """``calibrate_stereo`` as the CLI's first run does it (fresh corner cache)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        result = calibrate_stereo(left, right, pattern=PATTERN, square_m=SQUARE, jobs=jobs, cache_dir=Path(tmp))
+        elapsed = time.perf_counter() - t0
+    q = result.profile.provenance.calibration
+    return elapsed, q.views_detected if q else 0
+
+
+def first_run_table(sets: dict[str, tuple[list[Path], list[Path]]], jobs: int, repeats: int) -> None:
+    """Detection-only and whole-run times of plain and s2r, interleaved, ``repeats`` times per set."""
+    print(f"first run, median of {repeats} interleaved repeats (s2r jobs {jobs}); speed-up = plain / s2r")
+    print(f"{'set':<34} {'stage':<15} {'plain (1 proc)':>22} {'s2r':>22} {'speed-up':>9}  per repeat")
+    for label, (left, right) in sets.items():
+        paths = [p for pair in zip(left, right, strict=True) for p in pair]
+        runs: dict[str, list[tuple[float, int]]] = {k: [] for k in ("pd", "sd", "pw", "sw")}
+        for _ in range(repeats):
+            runs["pd"].append(plain_detect(paths))
+            runs["sd"].append(s2r_detect(paths, jobs))
+            runs["pw"].append(plain_whole(left, right))
+            runs["sw"].append(s2r_whole(left, right, jobs))
+        for stage, pk, sk, unit in (("detection only", "pd", "sd", "boards"), ("whole run", "pw", "sw", "pairs")):
+            tp = float(np.median([t for t, _ in runs[pk]]))
+            ts = float(np.median([t for t, _ in runs[sk]]))
+            each = " ".join(f"{a[0] / b[0]:.2f}" for a, b in zip(runs[pk], runs[sk], strict=True))
+            print(f"{label:<34} {stage:<15} {tp:7.2f} s {runs[pk][0][1]:4d} {unit:<6} {ts:7.2f} s "
+                  f"{runs[sk][0][1]:4d} {unit:<6} {tp / ts:7.2f}x  {each}")
+
+
 def s2r_detect(paths: list[Path], jobs: int) -> tuple[float, int]:
     """s2r's detection stream (first run: no cache), ``jobs`` processes."""
     items = (DetectItem(name=p.name, sha256=str(p), source=p) for p in paths)
     t0 = time.perf_counter()
     found = sum(d.status == "ok" for d in detect_stream(items, pattern=PATTERN, jobs=jobs))
     return time.perf_counter() - t0, found
-
-
-def detection_table(sets: dict[str, list[Path]], jobs: int) -> None:
-    print(f"{'detection only':<34} {'plain+FAST_CHECK (1 proc)':>26} {f's2r (jobs {jobs})':>18} {'speed-up':>9}")
-    for label, paths in sets.items():
-        t_plain, n_plain = plain_detect(paths)
-        t_s2r, n_s2r = s2r_detect(paths, jobs)
-        print(f"{label:<34} {t_plain:8.2f} s {n_plain:4d} boards     {t_s2r:7.2f} s {n_s2r:4d} boards "
-              f"{t_plain / t_s2r:6.2f}x")
 
 
 def s2r_run(left: list[Path], right: list[Path], cache: Path, jobs: int) -> tuple[float, dict[str, float]]:
@@ -179,12 +212,16 @@ def main() -> None:
     parser.add_argument("--memory-pairs", type=int, default=500)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--full-pairs", type=int, default=40, help="pairs of the set with a board in every view")
+    parser.add_argument("--repeats", type=int, default=3, help="interleaved repeats of the first-run table")
+    parser.add_argument("--only-first-run", action="store_true", help="print the first-run table only")
     args = parser.parse_args()
     truth = bench_rig()
     left, right = dataset(args.pairs, args.blank)
     full_l, full_r = dataset(args.full_pairs, 0)
-    detection_table({f"{args.pairs} pairs, {args.blank} without board": left + right,
-                     f"{args.full_pairs} pairs, a board in every view": full_l + full_r}, args.jobs)
+    first_run_table({f"{args.pairs} pairs, {args.blank} without board": (left, right),
+                     f"{args.full_pairs} pairs, a board in every view": (full_l, full_r)}, args.jobs, args.repeats)
+    if args.only_first_run:
+        return
     print(f"{args.pairs} pairs 1280x720 ({args.blank} without a board), jobs={args.jobs}, {os.cpu_count()} cores; "
           f"errors against the known rig (fx {truth.left.fx_px:.2f}, B {1000 * truth.baseline_m:.1f} mm)")
     t_plain, f_plain = plain_opencv(left, right, fast_check=False)

@@ -14,6 +14,7 @@ Frames: board poses are the board frame in each camera's optical frame; ``X_righ
 from __future__ import annotations
 
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import cv2
@@ -23,7 +24,7 @@ from numpy.typing import NDArray
 from s2r.calib.joint import JointInit
 from s2r.calib.lens import LensModel
 from s2r.calib.observations import StereoObservation
-from s2r.calib.solve import MonoSolution, solve_mono_observations
+from s2r.calib.solve import INIT_CRITERIA, MonoSolution, solve_mono_observations
 from s2r.errors import CalibrationError
 
 __all__ = ["PairScore", "RigInit", "check_rig", "initial_rig", "pair_consistency"]
@@ -80,9 +81,12 @@ def _angle_deg(R: FloatArray) -> float:
 
 
 def initial_rig(views: Sequence[StereoObservation], size: tuple[int, int], lens: LensModel) -> RigInit:
-    """Each camera alone (OpenCV), then the consensus relative pose. Every view must show both cameras."""
-    left = solve_mono_observations([v.left for v in views if v.left is not None], size, lens)
-    right = solve_mono_observations([v.right for v in views if v.right is not None], size, lens)
+    """Each camera alone (OpenCV, the two in parallel threads, stopped at :data:`INIT_CRITERIA`), then the
+    consensus relative pose. Every view must show both cameras."""
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        solves = [pool.submit(solve_mono_observations, [o for v in views if (o := getattr(v, side)) is not None],
+                              size, lens, criteria=INIT_CRITERIA) for side in ("left", "right")]
+        left, right = solves[0].result(), solves[1].result()
     rels = [_relative(rl, tl, rr, tr) for rl, tl, rr, tr in
             zip(left.rvecs, left.tvecs, right.rvecs, right.tvecs, strict=True)]
     Ts = np.array([t for _, t in rels])

@@ -46,6 +46,8 @@ DISTORTION_CHOICES: dict[str, tuple[int, int]] = {k: (m.cv_flags, m.n_coef) for 
 #: Indices of the free distortion coefficients per choice.
 FREE_DISTORTION: dict[str, tuple[int, ...]] = {k: m.free for k, m in LENS_MODELS.items()}
 _CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-9)
+#: Looser stopping rule for a solve that only initialises the joint refinement (which converges it anyway).
+INIT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-6)
 
 
 def distortion_flags(distortion: str) -> int:
@@ -87,14 +89,15 @@ class StereoSolution:
 
 
 def solve_mono(obj: Sequence[Points], img: Sequence[Points], size: tuple[int, int], *,
-               distortion: str = DEFAULT_LENS) -> MonoSolution:
-    """Calibrate one camera from board views (``size`` = (width, height) px)."""
+               distortion: str = DEFAULT_LENS, criteria: tuple[int, int, float] = _CRITERIA) -> MonoSolution:
+    """Calibrate one camera from board views (``size`` = (width, height) px); ``criteria``: OpenCV's
+    stopping rule (default tight; :data:`INIT_CRITERIA` for an initialisation)."""
     flags = distortion_flags(distortion)
     ncoef = DISTORTION_CHOICES[distortion][1]
     try:
         rms, K, D, rvecs, tvecs, std_i, _, per_view = cv2.calibrateCameraExtended(
             list(obj), [p.reshape(-1, 1, 2) for p in img], size, np.eye(3), np.zeros(ncoef), flags=flags,
-            criteria=_CRITERIA)
+            criteria=criteria)
     except cv2.error as exc:
         raise CalibrationError(f"OpenCV calibration failed: {str(exc).strip().splitlines()[-1]}",
                                hint="add more views with the board at different angles") from None
@@ -222,7 +225,7 @@ def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: S
 
 
 def solve_mono_observations(views: Sequence[BoardObservation], size: tuple[int, int],
-                            lens: LensModel) -> MonoSolution:
+                            lens: LensModel, *, criteria: tuple[int, int, float] = _CRITERIA) -> MonoSolution:
     """:func:`solve_mono` of one camera's observations (views may show different corner subsets)."""
     return solve_mono([v.obj.astype(np.float32) for v in views], [v.img.astype(np.float32) for v in views], size,
-                      distortion=lens.name)
+                      distortion=lens.name, criteria=criteria)

@@ -221,7 +221,8 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    models = compare_models(pl, pr, obj, size, chosen=distortion) if compare else None
+    models = compare_models(pl, pr, obj, size, chosen=distortion, guess=((sol.K1, sol.D1), (sol.K2, sol.D2))) \
+        if compare else None
     warnings = [*([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
