@@ -7,7 +7,7 @@ with outliers rejected inside the loop; every standard deviation comes from that
 
 ``fix_intrinsics`` (ROS camera_calibration's way): intrinsics from the mono solves, held fixed in
 ``cv2.stereoCalibrate``; the baseline std then adds the intrinsics' uncertainty propagated through the
-extrinsics (:func:`s2r.calib.solve.baseline_covariance`).
+extrinsics (:func:`s2r.calib.solve.extrinsics_covariance`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from s2r.calib.joint import JointSolution, solve_joint
 from s2r.calib.lens import LensModel, lens_model
 from s2r.calib.observations import StereoObservation, chessboard_observation
 from s2r.calib.rig import RigInit, check_rig, initial_rig, pair_consistency
-from s2r.calib.solve import baseline_covariance, outlier_threshold, solve_mono, solve_stereo
+from s2r.calib.solve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
 from s2r.errors import CalibrationError
 
 __all__ = ["PairSolution", "solve_pair"]
@@ -157,7 +157,8 @@ def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tu
         outliers += [(keep[j], float(st.per_view_px[j, 0]), float(st.per_view_px[j, 1]), float(both[j]),
                       f"outlier: stereo RMS {both[j]:.3f} px > {thr:.3f} px") for j in bad]
         keep = [k for j, k in enumerate(keep) if j not in set(bad)]
-    cov_t, _ = baseline_covariance(objs, pl, pr, st, distortion=lens.name, fixed_intrinsics=True)
+    cov_e, _ = extrinsics_covariance(objs, pl, pr, st, distortion=lens.name, fixed_intrinsics=True)
+    cov_t = cov_e[3:, 3:]
     u = st.T / np.linalg.norm(st.T)
     res = []
     for p_l, p_r, rv, tv in zip(pl, pr, st.rvecs, st.tvecs, strict=True):
@@ -166,7 +167,8 @@ def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tu
                     cv2.projectPoints(obj, r3, t3, st.K2, st.D2)[0].reshape(-1, 2) - p_r))
     return PairSolution(
         K1=st.K1, D1=st.D1, K2=st.K2, D2=st.D2, R=st.R, T=st.T, std_left=ml.std, std_right=mr.std,
-        baseline_std_m=float(np.sqrt(max(0.0, float(u @ cov_t @ u)))), rotation_std_deg=float("nan"),
+        baseline_std_m=float(np.sqrt(max(0.0, float(u @ cov_t @ u)))),
+        rotation_std_deg=float(np.degrees(np.sqrt(max(0.0, float(np.trace(cov_e[:3, :3])))))),
         rms_left_px=ml.rms_px, rms_right_px=mr.rms_px, rms_px=st.rms_px, keep=tuple(keep),
         per_view=np.column_stack([st.per_view_px, np.sqrt(np.mean(st.per_view_px ** 2, axis=1))]),
         threshold_px=thr, outliers=tuple(outliers), mismatched=(),

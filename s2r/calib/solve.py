@@ -32,6 +32,7 @@ __all__ = [
     "StereoSolution",
     "baseline_covariance",
     "distortion_flags",
+    "extrinsics_covariance",
     "outlier_threshold",
     "solve_mono",
     "solve_mono_observations",
@@ -176,7 +177,17 @@ def _schur(Jg: FloatArray, Jv: FloatArray) -> FloatArray:
 def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: Sequence[Points],
                         stereo: StereoSolution, *, distortion: str = DEFAULT_LENS,
                         fixed_intrinsics: bool = True) -> tuple[FloatArray, float]:
-    """Covariance (3x3, m^2) of the translation T and the residual sigma (px) of the stereo problem.
+    """Covariance (3x3, m^2) of the translation T and the residual sigma (px) of the stereo problem
+    (the translation block of :func:`extrinsics_covariance`)."""
+    cov, sigma = extrinsics_covariance(obj, img_l, img_r, stereo, distortion=distortion,
+                                       fixed_intrinsics=fixed_intrinsics)
+    return np.asarray(cov[3:, 3:], np.float64), sigma
+
+
+def extrinsics_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: Sequence[Points],
+                          stereo: StereoSolution, *, distortion: str = DEFAULT_LENS,
+                          fixed_intrinsics: bool = True) -> tuple[FloatArray, float]:
+    """Covariance (6x6) of the pair's rotation vector (rad) and translation T (m), and the residual sigma (px).
 
     Parameters: free intrinsics of both cameras, rotation vector and T of the pair, and one 6-dof board
     pose per view (eliminated by Schur complements). Jointly refined (``fixed_intrinsics`` False):
@@ -213,7 +224,7 @@ def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: S
     sigma2 = ssr / max(1, m - ng - 6 * len(obj))
     if not fixed_intrinsics:
         cov = sigma2 * np.linalg.pinv(A)
-        return np.asarray(cov[2 * ni + 3:, 2 * ni + 3:], np.float64), float(np.sqrt(sigma2))
+        return np.asarray(cov[2 * ni:, 2 * ni:], np.float64), float(np.sqrt(sigma2))
     k, e = slice(0, 2 * ni), slice(2 * ni, ng)
     A_ee_inv = np.linalg.pinv(A[e, e])
     S = -A_ee_inv @ A[e, k]
@@ -221,7 +232,7 @@ def baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], img_r: S
     cov_k[:ni, :ni] = sigma2 * np.linalg.pinv(A_l)
     cov_k[ni:, ni:] = sigma2 * np.linalg.pinv(A_r)
     cov_e = sigma2 * A_ee_inv + S @ cov_k @ S.T
-    return np.asarray(cov_e[3:, 3:], np.float64), float(np.sqrt(sigma2))
+    return np.asarray(cov_e, np.float64), float(np.sqrt(sigma2))
 
 
 def solve_mono_observations(views: Sequence[BoardObservation], size: tuple[int, int],

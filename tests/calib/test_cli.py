@@ -48,10 +48,14 @@ def test_fix_intrinsics_ros_way_recovers_the_rig(synthetic_set: tuple[Path, Ster
     """--fix-intrinsics (ROS's way: the joint solve is the default now, the old --refine-joint)."""
     folder, truth = synthetic_set
     out = tmp_path / "fixed.yaml"
-    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--fix-intrinsics", "--no-cache"]) == 0
-    capsys.readouterr()
+    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--fix-intrinsics", "--no-cache", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
     p = load_profile_file(out)
     assert "CALIB_FIX_INTRINSIC" in p.provenance.method
+    # a rotation std like the joint solve's (the intrinsics' uncertainty propagated), and an honest one
+    angle = np.degrees(np.linalg.norm(cv2.Rodrigues(p.R @ truth.R.T)[0]))
+    assert figures["rotation_std_deg"] is not None and 0 < figures["rotation_std_deg"] < 0.2
+    assert angle <= 3 * figures["rotation_std_deg"]
     for cam, true in ((p.left, truth.left), (p.right, truth.right)):
         assert abs(cam.fx_px - true.fx_px) < 0.0015 * true.fx_px
         assert abs(cam.cx_px - true.cx_px) < 0.7 and abs(cam.cy_px - true.cy_px) < 0.7
