@@ -16,7 +16,7 @@ blurred by a Gaussian of sigma 0.3-0.7 px after sensor noise of 1-2 grey levels.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -32,13 +32,16 @@ SQUARE_M = 0.025
 
 @dataclass(frozen=True)
 class ImageRig:
-    """Truth of a rendered rig: lenses (fx fy cx cy px, dist k1 k2 p1 p2 k3), ``X_right = R X_left + T``."""
+    """Truth of a rendered rig: lenses (fx fy cx cy px, dist k1 k2 p1 p2 k3), ``X_right = R X_left + T``,
+    and (after rendering) the true pixel positions (54, 2) of the inner corners per view, left and right,
+    in OpenCV's row-major order from the board's top-left inner corner."""
 
     left: rc.Lens
     right: rc.Lens
     R: Array
     T: Array
     size: tuple[int, int]
+    corners: tuple[tuple[Array, Array], ...] = ()
 
     @property
     def baseline_m(self) -> float:
@@ -148,7 +151,11 @@ def render_rig(seed: int, folder: Path, *, views: int = 20, size: tuple[int, int
     (folder / "right").mkdir(parents=True, exist_ok=True)
     for lens in (rig.left, rig.right):
         _fill_rays(lens)
-    for k, (Rb, tb) in enumerate(_poses(rig, views, seed)):
+    poses = _poses(rig, views, seed)
+    pts = rig.target.points
+    corners = tuple((rig.left.project(pts @ Rb.T + tb), rig.right.project(pts @ (rig.R @ Rb).T + rig.R @ tb + rig.T))
+                    for Rb, tb in poses)
+    for k, (Rb, tb) in enumerate(poses):
         for side, lens, (Rs, ts) in (("left", rig.left, (Rb, tb)),
                                      ("right", rig.right, (rig.R @ Rb, rig.R @ tb + rig.T))):
             img = rc.render(lens, rig.target, Rs, ts, seed=seed * 1000 + 2 * k + (side == "right"),
@@ -156,7 +163,7 @@ def render_rig(seed: int, folder: Path, *, views: int = 20, size: tuple[int, int
             sigma = float(rng.uniform(0.3, 0.7))
             img = cv2.GaussianBlur(img, (0, 0), sigma)
             cv2.imwrite(str(folder / side / f"{k:02d}.png"), img)
-    return truth
+    return replace(truth, corners=corners)
 
 
 def errors(truth: ImageRig, cams: list[tuple[float, float, float, float]], baseline_m: float) -> dict[str, list[float]]:
