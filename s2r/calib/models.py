@@ -109,24 +109,25 @@ def _test_errors(obj: Corners, test: Sequence[Corners], K: NDArray[np.float64], 
     return np.concatenate(out)
 
 
-def compare_models(left: Sequence[Corners], right: Sequence[Corners], obj: Corners, size: tuple[int, int], *,
+def compare_models(left: Sequence[Corners], right: Sequence[Corners] | None, obj: Corners, size: tuple[int, int], *,
                    chosen: str, folds: int = 5, models: Sequence[str] = tuple(LENS_MODELS),
                    guess: tuple[Guess, Guess] | None = None, threads: int | None = None) -> ModelComparison:
     """Held-out RMS of each model over ``folds`` leave-views-out folds of the views ``left[i]``/``right[i]``.
 
-    ``guess``: the left and right camera's (K, D) from the full solve, to start each training solve from;
-    ``threads``: parallel solves (default: the cores, at most 4).
+    ``right`` None: one camera (``--mono``). ``guess``: the left and right camera's (K, D) from the full
+    solve, to start each training solve from; ``threads``: parallel solves (default: the cores, at most 4).
     """
+    cams = [left] if right is None else [left, right]
     n = len(left)
     idx = np.linspace(0, n - 1, min(n, MAX_CV_VIEWS)).round().astype(int)
     idx = np.unique(idx)
     k = max(2, min(folds, len(idx) // 3))
     groups = [idx[f::k] for f in range(k)]
-    jobs = [(name, f, c) for name in models for f in range(k) for c in range(2)]
+    jobs = [(name, f, c) for name in models for f in range(k) for c in range(len(cams))]
 
     def run(job: tuple[str, int, int]) -> NDArray[np.float64]:
         name, f, c = job
-        cam = (left, right)[c]
+        cam = cams[c]
         held = set(groups[f].tolist())
         train = [cam[i] for i in idx if i not in held]
         return _heldout_sq(obj, train, [cam[i] for i in groups[f]], size, name, None if guess is None else guess[c])
@@ -137,7 +138,7 @@ def compare_models(left: Sequence[Corners], right: Sequence[Corners], obj: Corne
     for name in models:
         per_fold, all_sq = [], []
         for f in range(k):
-            sq = np.concatenate([results[(name, f, 0)], results[(name, f, 1)]])
+            sq = np.concatenate([results[(name, f, c)] for c in range(len(cams))])
             per_fold.append(float(np.sqrt(np.mean(sq))))
             all_sq.append(sq)
         scores.append(ModelScore(name, float(np.sqrt(np.mean(np.concatenate(all_sq)))), tuple(per_fold),

@@ -15,9 +15,11 @@ from numpy.typing import NDArray
 from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
 from s2r.calib.lens import DEFAULT_LENS
+from s2r.calib.models import ModelComparison, compare_models
 from s2r.calib.solve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.stereo import make_camera
 from s2r.calib.synth import board_object_points
+from s2r.calib.verdict import Verdict, mono_verdict
 from s2r.calib.views import MIN_VIEWS, check_sizes, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import CalibrationQuality, DroppedView, MonoProfile, Provenance, SourceFile
@@ -44,12 +46,15 @@ class MonoCalibration:
     warnings: tuple[str, ...]
     corners: tuple[Corners, ...] = field(repr=False)
     sample_path: Path | None = None
+    models: ModelComparison | None = None
+    verdict: Verdict | None = None
 
     def figures(self) -> dict[str, Any]:
         """The figures as JSON-ready values (what ``--json`` prints)."""
         cam = self.profile.camera
         quality = self.profile.provenance.calibration
         return {
+            "verdict": None if self.verdict is None else self.verdict.as_dict(),
             "profile": self.profile.name,
             "camera": {"fx_px": cam.fx_px, "fy_px": cam.fy_px, "cx_px": cam.cx_px, "cy_px": cam.cy_px,
                        "distortion": list(cam.distortion.coefficients),
@@ -60,6 +65,7 @@ class MonoCalibration:
             "dropped": [d.model_dump(mode="json") for d in self.dropped],
             "coverage_grid": self.coverage.counts.tolist(),
             "warnings": list(self.warnings),
+            "model_comparison": None if self.models is None else self.models.as_dict(),
         }
 
 
@@ -86,9 +92,9 @@ def _solve_with_outliers(names: list[str], corners: list[Corners], obj: Corners,
 def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), square_m: float = 0.025,
                    name: str = "calibrated", distortion: str = DEFAULT_LENS, max_error_px: float | None = None,
                    jobs: int | None = None, cache_dir: Path | None = None,
-                   progress: ProgressCallback | None = None) -> MonoCalibration:
-    """Calibrate one camera from chessboard image files; same detection, outlier and coverage rules as
-    :func:`s2r.calib.calibrate_stereo`."""
+                   progress: ProgressCallback | None = None, compare: bool = True) -> MonoCalibration:
+    """Calibrate one camera from chessboard image files; same detection, outlier and coverage rules, held-out
+    model comparison (``compare``) and verdict as :func:`s2r.calib.calibrate_stereo`."""
     hashes = {Path(p): sha256_file(p) for p in paths}
     items = (DetectItem(name=f"{Path(p).parent.name}/{Path(p).name}", sha256=hashes[Path(p)], source=Path(p))
              for p in paths)
@@ -121,10 +127,20 @@ def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6), 
                           provenance=Provenance(origin="real", method=_METHOD, calibration=quality,
                                                 sources=tuple(SourceFile(path=str(p), sha256=h)
                                                               for p, h in hashes.items())))
-    warnings = coverage_warnings("the", cov, spread)
+    models = compare_models(used, None, obj, size, chosen=distortion, guess=((sol.K, sol.D), (sol.K, sol.D))) \
+        if compare else None
+    unobservable = [n for n, sd in zip(("fx", "fy", "cx", "cy"), sol.std[:4], strict=True) if not np.isfinite(sd)]
+    warnings = [*([models.warning] if models is not None and models.warning else []),
+                *coverage_warnings("the", cov, spread)]
     for w in warnings:
         log.warning("%s", w)
+    cam = profile.camera
+    verdict = mono_verdict(
+        rms_px=sol.rms_px, heldout_px=None if models is None else next(m.heldout_px for m in models.scores
+                                                                       if m.chosen),
+        fx_px=cam.fx_px, fx_std_px=None if cam.std is None else cam.std.fx_px, coverage=cov.fraction,
+        model_warning=None if models is None else models.warning, unobservable=unobservable)
     return MonoCalibration(profile=profile, view_names=tuple(names[i] for i in keep),
                            view_errors_px=tuple(float(e) for e in sol.per_view_px), dropped=dropped,
                            threshold_px=thr, coverage=cov, spread=spread, warnings=tuple(warnings),
-                           corners=tuple(used), sample_path=ok[keep[0]][0])
+                           corners=tuple(used), sample_path=ok[keep[0]][0], models=models, verdict=verdict)

@@ -121,10 +121,10 @@ def _dropped_table(result: StereoCalibration | MonoCalibration) -> str:
 _BANNER = {"good": "pass", "check": "warn", "poor": "fail"}
 
 
-def _verdict_section(result: StereoCalibration) -> ReportSection:
+def _verdict_section(result: StereoCalibration | MonoCalibration) -> ReportSection:
     v = result.verdict
     if v is None:
-        return ReportSection("Verdict", paragraphs=["no verdict (computed by calibrate_stereo)"])
+        return ReportSection("Verdict", paragraphs=["no verdict (computed by calibrate_stereo / calibrate_mono)"])
     items = "".join(f"<li><b>{r.level}</b>: {html.escape(r.text)}</li>" for r in v.reasons)
     return ReportSection("Verdict", banner=(_BANNER[v.level], f"{v.level.upper()}"), paragraphs=[f"<ul>{items}</ul>"])
 
@@ -145,7 +145,7 @@ def _extrinsic_rows(result: StereoCalibration) -> list[list[Any]]:
     return rows
 
 
-def _models_table(result: StereoCalibration) -> str:
+def _models_table(result: StereoCalibration | MonoCalibration) -> str:
     if result.models is None:
         return "<p class='note'>model comparison not computed</p>"
     rows = [[s.model + (" (used)" if s.chosen else ""), s.heldout_px, " ".join(f"{f:.3f}" for f in s.folds_px),
@@ -222,7 +222,9 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     names = list(result.view_names) + [d.name for d in result.dropped if d.rms_px is not None]
     errs = list(result.view_errors_px) + [float(d.rms_px) for d in result.dropped if d.rms_px is not None]
     used = [True] * len(result.view_names) + [False] * (len(names) - len(result.view_names))
-    sections = [summary, ReportSection("Per-view errors", images=[
+    sections = [_verdict_section(result), summary,
+                ReportSection("Lens model comparison", tables=[_models_table(result)]),
+                ReportSection("Per-view errors", images=[
         ("per-view RMS", _error_chart(names, {"camera": errs}, used, result.threshold_px))],
         tables=[_dropped_table(result)]),
         ReportSection("Coverage", images=[("views whose board covers each part of the image", coverage_maps(

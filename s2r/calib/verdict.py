@@ -13,7 +13,9 @@ board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
 ============================  ========  =========  ==============================================
 
 A better lens model on held-out views, unobservable parameters and dropped mismatched pairs make it at
-least "check". The verdict is the worst level.
+least "check". The verdict is the worst level. One camera (``--mono``): the same RMS, held-out and coverage
+limits, and the focal length's std relative to the focal length instead of the baseline's (good <= 0.5 %,
+check <= 2 %).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import Literal
 
 import numpy as np
 
-__all__ = ["Reason", "Verdict", "stereo_verdict"]
+__all__ = ["Reason", "Verdict", "mono_verdict", "stereo_verdict"]
 
 Level = Literal["good", "check", "poor"]
 _ORDER = {"good": 0, "check": 1, "poor": 2}
@@ -60,12 +62,8 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
                    baseline_std_m: float | None, coverage: Sequence[float], model_warning: str | None = None,
                    unobservable: Sequence[str] = (), mismatched: int = 0) -> Verdict:
     """Judge a stereo calibration from its figures (see the module table)."""
-    reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"stereo RMS reprojection error {rms_px:.3f} px")]
-    if heldout_px is not None:
-        level = _grade(heldout_px, 0.6, 1.2)
-        if level == "good" and heldout_px > 2 * rms_px:
-            level = "check"
-        reasons.append(Reason(level, f"held-out error {heldout_px:.3f} px (views left out of the fit)"))
+    reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"stereo RMS reprojection error {rms_px:.3f} px"),
+               *_heldout(heldout_px, rms_px)]
     reasons.append(Reason(_grade(epipolar_px, 0.5, 1.0), f"epipolar RMS after rectification {epipolar_px:.3f} px"))
     if baseline_std_m is None:
         reasons.append(Reason("check", "baseline uncertainty unknown"))
@@ -73,15 +71,44 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
         rel = 100 * baseline_std_m / baseline_m
         reasons.append(Reason(_grade(rel, 0.5, 2.0), f"baseline {baseline_m * 1000:.2f} mm, std "
                                                       f"{baseline_std_m * 1000:.3g} mm ({rel:.2g} %)"))
-    worst = min(coverage) if coverage else 0.0
-    cov_level: Level = "good" if worst >= 0.5 else "check" if worst >= 0.2 else "poor"
-    reasons.append(Reason(cov_level, "boards cover " + " / ".join(f"{100 * c:.0f} %" for c in coverage)
-                          + " of the image" + ("" if cov_level == "good" else "; add views near the edges")))
-    if model_warning:
-        reasons.append(Reason("check", model_warning))
-    if unobservable:
-        reasons.append(Reason("check", f"not observable from these views: {', '.join(unobservable)}"))
+    reasons += _common(coverage, model_warning, unobservable)
     if mismatched:
         reasons.append(Reason("check", f"{mismatched} mismatched pair(s) dropped"))
     level = max((r.level for r in reasons), key=lambda lv: _ORDER[lv])
     return Verdict(level, tuple(reasons))
+
+
+def mono_verdict(*, rms_px: float, heldout_px: float | None, fx_px: float, fx_std_px: float | None,
+                 coverage: float, model_warning: str | None = None, unobservable: Sequence[str] = ()) -> Verdict:
+    """Judge a single-camera calibration (see the module table)."""
+    reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"RMS reprojection error {rms_px:.3f} px"),
+               *_heldout(heldout_px, rms_px)]
+    if fx_std_px is None:
+        reasons.append(Reason("check", "focal length uncertainty unknown"))
+    else:
+        rel = 100 * fx_std_px / fx_px
+        reasons.append(Reason(_grade(rel, 0.5, 2.0), f"fx {fx_px:.2f} px, std {fx_std_px:.2g} px ({rel:.2g} %)"))
+    reasons += _common([coverage], model_warning, unobservable)
+    level = max((r.level for r in reasons), key=lambda lv: _ORDER[lv])
+    return Verdict(level, tuple(reasons))
+
+
+def _heldout(heldout_px: float | None, rms_px: float) -> list[Reason]:
+    if heldout_px is None:
+        return []
+    level = _grade(heldout_px, 0.6, 1.2)
+    if level == "good" and heldout_px > 2 * rms_px:
+        level = "check"
+    return [Reason(level, f"held-out error {heldout_px:.3f} px (views left out of the fit)")]
+
+
+def _common(coverage: Sequence[float], model_warning: str | None, unobservable: Sequence[str]) -> list[Reason]:
+    worst = min(coverage) if coverage else 0.0
+    cov_level: Level = "good" if worst >= 0.5 else "check" if worst >= 0.2 else "poor"
+    out = [Reason(cov_level, "boards cover " + " / ".join(f"{100 * c:.0f} %" for c in coverage)
+                  + " of the image" + ("" if cov_level == "good" else "; add views near the edges"))]
+    if model_warning:
+        out.append(Reason("check", model_warning))
+    if unobservable:
+        out.append(Reason("check", f"not observable from these views: {', '.join(unobservable)}"))
+    return out

@@ -207,13 +207,13 @@ def _print_summary(result: Any, out: Path) -> None:
               f"{_pm(figures['baseline_m'] * 1000, None if b_std is None else b_std * 1000)} mm, RMS left "
               f"{q.get('rms_left_px', 0):.3f} right {q.get('rms_right_px', 0):.3f} stereo "
               f"{q.get('rms_stereo_px', 0):.3f} px, epipolar {q.get('epipolar_rms_px', 0):.3f} px")
-        models = figures.get("model_comparison")
-        if models:
-            print("  held-out error: " + ", ".join(
-                f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
-                + " px (* used)")
     else:
         print(f"  RMS {q.get('rms_left_px', 0):.3f} px")
+    models = figures.get("model_comparison")
+    if models:
+        print("  held-out error: " + ", ".join(
+            f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
+            + " px (* used)")
     for d in figures["dropped"]:
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
         print(f"  skipped {d['name']}{rms}: {d['reason']}")

@@ -75,7 +75,12 @@ def test_mono_calibration_writes_a_camera_profile(synthetic_set: tuple[Path, Ste
     assert abs(cam.fx_px - truth.right.fx_px) < 0.0015 * truth.right.fx_px
     assert cam.std is not None and cam.std.fx_px is not None
     assert abs(cam.fx_px - truth.right.fx_px) <= 3 * cam.std.fx_px
-    assert "Per-view errors" in (tmp_path / "rep" / "index.html").read_text()
+    html = (tmp_path / "rep" / "index.html").read_text()
+    assert "Per-view errors" in html and "Verdict" in html and "Lens model comparison" in html
+    # a verdict and the held-out model comparison, as for a pair
+    assert figures["verdict"]["level"] in ("good", "check", "poor") and figures["verdict"]["reasons"]
+    models = figures["model_comparison"]["models"]
+    assert [m["model"] for m in models if m["chosen"]] == ["k1k2p1p2"] and all(m["heldout_px"] > 0 for m in models)
 
 
 def test_prefixed_files_and_globs_pair_by_number(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
