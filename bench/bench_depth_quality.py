@@ -2,14 +2,14 @@
 
 Run: ``.venv/bin/python bench/bench_depth_quality.py [--repeat 5] [--num-disparities 256]``
 
-Needs ``../shared/data/opencv_stereo_chessboard`` (README there). The profile is calibrated from the same set
-with ``s2r calibrate`` (defaults). Both sides take their depth from the same ``StereoPipeline.compute`` (its
-speed beside plain OpenCV is bench_depth.py's subject), so this compares the metrics. Per pair, plain
-OpenCV = what a careful user writes by hand on that depth: ``findChessboardCorners`` + ``cornerSubPix`` on the
-rectified left image, ``solvePnP`` (IPPE, then LM) for the board's plane, the ROI as the filled hull of the
-outer corners, and numpy for Z accuracy (median of (Z - Z_plane) / Z_plane), plane-fit RMS (total least squares plane, residuals along the ray, % of distance) and
-fill rate. s2r = ``measure_board_views`` on ``stereo_views`` (what ``s2r depth-quality`` runs), which also
-refits inside 5 robust sigmas, groups repeated poses and writes notes.
+Needs ``../shared/data/opencv_stereo_chessboard`` (README there). The profile is calibrated from the same set with
+``s2r calibrate`` (defaults). Both sides take their depth from the same ``StereoPipeline.compute`` (its speed
+beside plain OpenCV is bench_depth.py's subject), so this compares the metrics. Per pair, plain OpenCV = what a
+careful user writes by hand on that depth: ``findChessboardCorners`` + ``cornerSubPix`` on the rectified left
+image, ``solvePnP`` (IPPE, then LM) for the board's plane, the ROI as the filled hull of the outer corners, and
+numpy for Z accuracy (median of (Z - Z_plane) / Z_plane), plane-fit RMS (total least squares plane, residuals along
+the ray, % of distance) and fill rate. s2r = ``measure_board_views`` on ``stereo_views`` (what ``s2r
+depth-quality`` runs), which also refits inside 5 robust sigmas, groups repeated poses and writes notes.
 
 Prints per frame the figures of both (they should agree: same definition, s2r's fit is robust), then the time
 per frame of each, alternating runs, as a ratio.
