@@ -52,7 +52,7 @@ def plain_frame(pipe: StereoPipeline, left_path: Path, right_path: Path) -> dict
         return None
     corners = cv2.cornerSubPix(rl, corners, (11, 11), (-1, -1),
                                (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01))
-    K = np.asarray(pipe.geometry_for((left.shape[1], left.shape[0])).rectification.P1[:3, :3], np.float64)
+    K = np.asarray(pipe.geometry_for((rl.shape[1], rl.shape[0])).rectification.P1[:3, :3], np.float64)
     obj = np.zeros((PATTERN[0] * PATTERN[1], 3), np.float64)
     obj[:, :2] = np.mgrid[0:PATTERN[0], 0:PATTERN[1]].T.reshape(-1, 2) * SQUARE_M
     _, rvec, tvec = cv2.solvePnP(obj, corners, K, None, flags=cv2.SOLVEPNP_IPPE)
