@@ -5,8 +5,9 @@ lenses with tangential terms up to 5e-4 and |k3| <= 0.02, 20 views, mild blur an
 calibrated by s2r exactly as ``s2r calibrate`` does with default flags (``calibrate_stereo``: detection,
 joint solve, checks; the held-out model comparison is off because it does not change the numbers) and by a
 plain OpenCV script on the same images: findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE) +
-cornerSubPix (11x11 window, as OpenCV's sample) + calibrateCamera per camera + stereoCalibrate (intrinsics
-fixed, as OpenCV's stereo sample and ROS do; and jointly refined with USE_INTRINSIC_GUESS).
+cornerSubPix (half-window 11 px as OpenCV's stereo sample, "w11", and a small 5 px one, "w5", that does not
+reach neighbouring corners on these boards' 20-45 px squares) + calibrateCamera per camera + stereoCalibrate
+(intrinsics fixed, as OpenCV's stereo sample and ROS do; and jointly refined with USE_INTRINSIC_GUESS).
 
 Per row: worst and median focal error (% of f, fx and fy of both cameras), principal point error (px, cx and
 cy of both cameras), baseline error (% of |T|), and for s2r the share of parameters (fx fy cx cy of both
@@ -61,8 +62,8 @@ def run_s2r(truth: ImageRig, folder: Path, distortion: str) -> Row:
     return row
 
 
-def opencv_corners(folder: Path) -> tuple[list[np.ndarray], list[np.ndarray], tuple[int, int]]:
-    """The plain loop's refined corners of the pairs found in both images."""
+def opencv_corners(folder: Path, win: int = 11) -> tuple[list[np.ndarray], list[np.ndarray], tuple[int, int]]:
+    """The plain loop's refined corners (cornerSubPix half-window ``win`` px) of the pairs found in both images."""
     cl, cr = [], []
     size = (0, 0)
     for pl in sorted((folder / "left").glob("*.png")):
@@ -71,7 +72,7 @@ def opencv_corners(folder: Path) -> tuple[list[np.ndarray], list[np.ndarray], tu
             g = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
             size = (g.shape[1], g.shape[0])
             ok, c = cv2.findChessboardCorners(g, PATTERN, flags=_FIND)
-            found.append(cv2.cornerSubPix(g, c, (11, 11), (-1, -1), _CRIT) if ok else None)
+            found.append(cv2.cornerSubPix(g, c, (win, win), (-1, -1), _CRIT) if ok else None)
         if found[0] is not None and found[1] is not None:
             cl.append(found[0])
             cr.append(found[1])
@@ -124,16 +125,16 @@ def main() -> None:
     print(f"{'calibration':<28} {'focal err %':>15} | {'pp err px':>13} | {'baseline %':>13} | "
           f"{'<=1sig <=3sig':>15} | views | s/rig")
     print(f"{'':<28} {'worst':>7} {'median':>7} | {'worst':>6} {'median':>6} | {'worst':>6} {'median':>6} |")
-    t0 = time.perf_counter()
-    corners = [opencv_corners(folder) for _, folder in rigs]
-    t_det = (time.perf_counter() - t0) / len(rigs)
-    anchors = {"OpenCV plumb_bob fixed-K": (0, False), "OpenCV plumb_bob joint": (0, True),
-               "OpenCV k1k2p1p2 fixed-K": (cv2.CALIB_FIX_K3, False),
-               "OpenCV k1k2p1p2 joint": (cv2.CALIB_FIX_K3, True)}
-    for label, (flags, joint) in anchors.items():
+    for win in (11, 5):
         t0 = time.perf_counter()
-        rows = [run_opencv(truth, c, flags, joint) for (truth, _), c in zip(rigs, corners, strict=True)]
-        print(summarise(label, rows, time.perf_counter() - t0 + len(rows) * t_det))
+        corners = [opencv_corners(folder, win) for _, folder in rigs]
+        t_det = (time.perf_counter() - t0) / len(rigs)
+        anchors = {"plumb_bob fixed-K": (0, False), "plumb_bob joint": (0, True),
+                   "k1k2p1p2 fixed-K": (cv2.CALIB_FIX_K3, False), "k1k2p1p2 joint": (cv2.CALIB_FIX_K3, True)}
+        for label, (flags, joint) in anchors.items():
+            t0 = time.perf_counter()
+            rows = [run_opencv(truth, c, flags, joint) for (truth, _), c in zip(rigs, corners, strict=True)]
+            print(summarise(f"OpenCV w{win} {label}", rows, time.perf_counter() - t0 + len(rows) * t_det))
     for model in args.models.split(","):
         t0 = time.perf_counter()
         rows = [run_s2r(truth, folder, model) for truth, folder in rigs]

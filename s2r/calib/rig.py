@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.joint import JointInit
 from s2r.calib.lens import LensModel
-from s2r.calib.observations import StereoObservation
+from s2r.calib.observations import BoardObservation, StereoObservation
 from s2r.calib.solve import INIT_CRITERIA, MonoSolution, solve_mono_observations
 from s2r.errors import CalibrationError
 
@@ -34,6 +34,9 @@ FloatArray = NDArray[np.float64]
 MAX_BOARD_DISTANCE_M = 30.0
 MAX_BASELINE_M = 3.0
 MIN_BOARD_DISTANCE_M = 0.02
+#: Most views each camera's initialisation solves with (evenly spaced); the other views' board poses are then
+#: fitted alone (solvePnP) with those intrinsics. The joint solve refines everything on all views.
+MAX_INIT_VIEWS = 20
 
 
 @dataclass(frozen=True)
@@ -84,8 +87,8 @@ def initial_rig(views: Sequence[StereoObservation], size: tuple[int, int], lens:
     """Each camera alone (OpenCV, the two in parallel threads, stopped at :data:`INIT_CRITERIA`), then the
     consensus relative pose. Every view must show both cameras."""
     with ThreadPoolExecutor(max_workers=2) as pool:
-        solves = [pool.submit(solve_mono_observations, [o for v in views if (o := getattr(v, side)) is not None],
-                              size, lens, criteria=INIT_CRITERIA) for side in ("left", "right")]
+        solves = [pool.submit(_mono_init, [o for v in views if (o := getattr(v, side)) is not None], size, lens)
+                  for side in ("left", "right")]
         left, right = solves[0].result(), solves[1].result()
     rels = [_relative(rl, tl, rr, tr) for rl, tl, rr, tr in
             zip(left.rvecs, left.tvecs, right.rvecs, right.tvecs, strict=True)]
@@ -100,6 +103,28 @@ def initial_rig(views: Sequence[StereoObservation], size: tuple[int, int], lens:
                 and float(np.max(np.abs(v.left.img - v.right.img))) < 1e-3)
         scores.append(PairScore(v.name, float(np.linalg.norm(Tk - T)), _angle_deg(Rk @ R.T), same))
     return RigInit(left, right, R, T, tuple(scores))
+
+
+def _mono_init(views: Sequence[BoardObservation], size: tuple[int, int], lens: LensModel) -> MonoSolution:
+    """One camera's starting point: OpenCV's calibration on at most :data:`MAX_INIT_VIEWS` evenly spaced views
+    (stopped at :data:`INIT_CRITERIA`), then every view's board pose fitted alone with those intrinsics."""
+    if len(views) <= MAX_INIT_VIEWS:
+        return solve_mono_observations(views, size, lens, criteria=INIT_CRITERIA)
+    idx = np.unique(np.linspace(0, len(views) - 1, MAX_INIT_VIEWS).round().astype(int))
+    sub = solve_mono_observations([views[i] for i in idx], size, lens, criteria=INIT_CRITERIA)
+    rvecs, tvecs, errs = [], [], []
+    for k, v in enumerate(views):
+        obj, img = v.obj.astype(np.float64), v.img.astype(np.float64).reshape(-1, 1, 2)
+        ok, rv, tv = cv2.solvePnP(obj, img, sub.K, sub.D)
+        if not ok:
+            raise CalibrationError(f"the board pose of view {k + 1} could not be fitted", field="input",
+                                   hint="check the images (is the whole board visible?)")
+        rv, tv = cv2.solvePnPRefineLM(obj, img, sub.K, sub.D, rv, tv)
+        proj = cv2.projectPoints(obj, rv, tv, sub.K, sub.D)[0].reshape(-1, 2)
+        errs.append(float(np.sqrt(np.mean(np.sum((proj - img.reshape(-1, 2)) ** 2, axis=1)))))
+        rvecs.append(np.asarray(rv, np.float64).reshape(3))
+        tvecs.append(np.asarray(tv, np.float64).reshape(3))
+    return replace(sub, rvecs=tuple(rvecs), tvecs=tuple(tvecs), per_view_px=np.array(errs))
 
 
 def pair_consistency(scores: Sequence[PairScore], baseline_m: float) -> list[int]:
