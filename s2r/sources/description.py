@@ -25,7 +25,8 @@ OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
 
 @dataclass(frozen=True)
 class LensIntrinsics:
-    """``<lens><intrinsics>`` (gz-sim): focal lengths, principal point and skew in pixels."""
+    """``<lens><intrinsics>`` (gz-sim and Gazebo classic): focal lengths, principal point (OpenCV's + 0.5) and skew,
+    pixels."""
 
     fx: float
     fy: float
@@ -76,6 +77,8 @@ class PluginSpec:
     frame_name: str | None = None
     camera_name: str | None = None
     line: int | None = None
+    #: ``<borderCrop>`` (gazebo_ros, default true): crop a barrel-distorted image (k1 < 0), magnifying it.
+    border_crop: bool = True
 
 
 @dataclass(frozen=True, eq=False)

@@ -136,7 +136,9 @@ def _plugin(doc: XmlDoc, sensor: ET.Element) -> PluginSpec | None:
 
     hack, focal = first("hackBaseline", "hack_baseline"), first("focalLength", "focal_length")
     frame, name = first("frameName", "frame_name"), first("cameraName", "camera_name")
+    crop = first("borderCrop", "border_crop")
     return PluginSpec(
+        border_crop=crop is None or (crop.text or "").strip().lower() not in ("false", "0"),
         filename=node.get("filename", ""), line=doc.line(node),
         hack_baseline=read_float(doc, hack), hack_baseline_line=doc.line(hack),
         hack_baseline_tag="" if hack is None else hack.tag,
