@@ -21,6 +21,7 @@ from s2r.formats.realsense import is_realsense_text, load_realsense
 from s2r.formats.ros import is_camera_info_mapping, load_ros_pair
 from s2r.formats.s2r_yaml import load_profile_file
 from s2r.formats.zed import is_zed_conf, load_zed
+from s2r.geometry import baseline_layout_problem
 from s2r.profile import StereoProfile
 
 __all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any", "warn_implausible_baseline"]
@@ -168,6 +169,9 @@ def load_any(
         profile = _load_single(files[0], fmts[0], name=name, origin=origin, image_size=image_size,
                                t_scale_m=t_scale_m, resolution=resolution, cameras=cameras)
     warn_implausible_baseline(profile, files[-1])
+    problem = baseline_layout_problem(-profile.R.T @ profile.T)
+    if problem is not None:  # the rule lint and from-urdf apply; --to ros refuses such a pair
+        log.warning("%s: ERROR [%s] %s: swap the left and right inputs", files[-1], *problem)
     return profile
 
 
