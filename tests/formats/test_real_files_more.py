@@ -116,3 +116,42 @@ def test_opencv_rational_model_in_squares(caplog: pytest.LogCaptureFixture) -> N
     scaled = load_any(files, image_size=(1344, 752), t_scale_m=0.0254)
     t = np.array([-5.0642389222739590, 2.5098869010049409e-02, -5.6501418395606122e-02])
     assert scaled.baseline_m == pytest.approx(0.0254 * float(np.linalg.norm(t)), abs=1e-12)
+
+
+def test_camera_info_written_by_opencv_filestorage(tmp_path: Path) -> None:
+    """The camera_calibration layout saved through cv::FileStorage (``%YAML:1.0``, ``!!opencv-matrix`` camera_matrix
+    and distortion, plain rectification/projection maps), as a public narrow_stereo/left.yaml has it (left values
+    as published; the right file written the same way with P Tx = -14.3895): B = 14.3895 / 239.825516 = 0.0600 m."""
+    head = ("%YAML:1.0\nimage_width: 640\nimage_height: 480\ncamera_name: narrow_stereo/{side}\n"
+            "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+            "  data: [369.40269, 0, 310.549287, 0, 371.158263, 230.099198, 0, 0, 1]\ndistortion_model: plumb_bob\n"
+            "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n  dt: d\n"
+            "  data: [-0.331914, 0.068294, -0.00294, 0.004949, 0]\n"
+            "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+            "projection_matrix:\n  rows: 3\n  cols: 4\n"
+            "  data: [239.825516, 0, 320.12496, {tx}, 0, 302.331085, 220.692742, 0, 0, 0, 1, 0]\n")
+    left, right = tmp_path / "left.yaml", tmp_path / "right.yaml"
+    left.write_text(head.format(side="left", tx=0))
+    right.write_text(head.format(side="right", tx=-14.3895))
+    p = load_any([left, right])
+    assert (p.left.fx_px, p.left.cy_px, p.image_size) == (369.40269, 230.099198, (640, 480))
+    assert p.left.distortion.coefficients == (-0.331914, 0.068294, -0.00294, 0.004949, 0.0)
+    assert p.baseline_m == pytest.approx(14.3895 / 239.825516, abs=1e-12)
+
+
+def test_camera_info_with_a_flat_distortion_list(tmp_path: Path) -> None:
+    """Some drivers' files give distortion_coefficients as a plain list (values from a public 1600x1200 file)."""
+    text = ("image_width: 1600\nimage_height: 1200\ndistortion_model: plumb_bob\n"
+            "distortion_coefficients: [-0.173831269260396, 0.10747272137157605, 0.004231076633773206, "
+            "-0.0026692219494915187, 0.0]\n"
+            "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [1158.625855755729, 0.0, 765.5609812846063,\n"
+            "        0.0, 1156.0604864187183, 588.6683184401453,\n        0.0, 0.0, 1.0]\n"
+            "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+            "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [1158.625855755729, 0.0, 765.5609812846063, {tx}, "
+            "0.0, 1156.0604864187183, 588.6683184401453, 0.0, 0.0, 0.0, 1.0, 0.0]\n")
+    left, right = tmp_path / "left.yaml", tmp_path / "right.yaml"
+    left.write_text(text.format(tx=0.0))
+    right.write_text(text.format(tx=-115.8625855755729))
+    p = load_any([left, right])
+    assert p.left.distortion.coefficients[0] == -0.173831269260396
+    assert p.baseline_m == pytest.approx(0.1, abs=1e-12)
