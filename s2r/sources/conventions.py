@@ -58,6 +58,7 @@ __all__ = [
     "DistortionFit",
     "Intrinsics",
     "check_convention",
+    "classic_distortion_scale",
     "crop_magnification",
     "focal_from_hfov",
     "gazebo_to_opencv_distortion",
@@ -132,6 +133,13 @@ def gz_sim_distortion_scale(width_px: int, height_px: int, hfov_rad: float) -> f
     aspect = width_px / height_px
     fovy = 2.0 * math.atan(math.tan(hfov_rad / 2.0) / aspect)
     fov = fovy * aspect if width_px >= height_px else fovy
+    return 2.0 * math.tan(fov / 2.0)
+
+
+def classic_distortion_scale(width_px: int, height_px: int, hfov_rad: float) -> float:
+    """Gazebo classic with ``<ignition:legacy_mode>false``: ``s = 2 tan(fov / 2)`` with its own ``fov`` (HFOV,
+    or the VFOV ``2 atan(tan(hfov / 2) H / W)`` when H > W; Distortion::SetCamera): ``W / f`` for W >= H."""
+    fov = hfov_rad if width_px >= height_px else 2.0 * math.atan(math.tan(hfov_rad / 2.0) * height_px / width_px)
     return 2.0 * math.tan(fov / 2.0)
 
 

@@ -48,6 +48,8 @@ class GazeboDistortion:
     p2: float = 0.0
     center: tuple[float, float] = (0.5, 0.5)
     line: int | None = None
+    #: Gazebo classic's ``<ignition:legacy_mode>`` (default true): false = coefficients in the W/f-scaled units.
+    legacy_mode: bool = True
 
     @property
     def is_zero(self) -> bool:

@@ -28,6 +28,7 @@ from s2r.sources.conventions import (
     CENTRE_OFFSET_PX,
     Intrinsics,
     check_convention,
+    classic_distortion_scale,
     crop_magnification,
     gazebo_to_opencv_distortion,
     gz_sim_distortion_scale,
@@ -72,6 +73,8 @@ def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
     coeffs: tuple[float, ...] = (d.k1, d.k2, d.k3, d.p1, d.p2)
     if convention == "gz-sim":  # gz-rendering's units: image-normalised ones scaled by 2 tan(fov / 2)
         coeffs = scale_distortion(coeffs, 1.0 / gz_sim_distortion_scale(spec.width, spec.height, spec.hfov_rad))
+    elif not d.legacy_mode:  # Gazebo classic's <ignition:legacy_mode>false</ignition:legacy_mode> (PR 3009)
+        coeffs = scale_distortion(coeffs, 1.0 / classic_distortion_scale(spec.width, spec.height, spec.hfov_rad))
     _warn_crop(spec, coeffs, d.center, convention)
     fit = gazebo_to_opencv_distortion(*coeffs, width=spec.width, height=spec.height,
                                       fx=k.fx, fy=k.fy, center=d.center, principal=(k.cx - offset, k.cy - offset))

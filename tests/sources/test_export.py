@@ -199,3 +199,27 @@ def test_gz_sim_writes_gz_rendering_units_and_classic_turns_the_crop_off(distort
     cropped.write_text(classic.replace("<borderCrop>false</borderCrop>", ""))
     load_description_profile(cropped)
     assert "magnifying it" in caplog.text and "<borderCrop>false</borderCrop>" in caplog.text
+
+
+def test_classic_legacy_mode_false_reads_in_scaled_units(distorted_rig: StereoProfile, tmp_path: Path) -> None:
+    """<ignition:legacy_mode>false (gazebo-classic PR 3009) multiplies texture offsets by W / f first, so the same
+    lens is written with k1 / s^2, k2 / s^4, p / s (s = 2 tan(hfov / 2) = W / f): both files read back alike."""
+    import re
+
+    from s2r.sources.conventions import classic_distortion_scale, hfov_from_focal
+
+    legacy, _ = export_gazebo(distorted_rig, fmt="sdf")
+    a = tmp_path / "legacy.sdf"
+    a.write_text(legacy)
+
+    def rescaled(match: re.Match[str]) -> str:
+        cam_fx = distorted_rig.left.fx_px if match.start() < legacy.index('name="right"') else distorted_rig.right.fx_px
+        s = classic_distortion_scale(640, 480, hfov_from_focal(640, cam_fx))
+        powers = {"k1": 2, "k2": 4, "k3": 6, "p1": 1, "p2": 1}
+        return f"<{match[1]}>{float(match[2]) / s ** powers[match[1]]!r}</{match[1]}>"
+
+    scaled = re.sub(r"<(k1|k2|k3|p1|p2)>([^<]+)</\1>", rescaled, legacy)
+    b = tmp_path / "new_mode.sdf"
+    b.write_text(scaled.replace("<center>", "<ignition:legacy_mode>false</ignition:legacy_mode><center>"))
+    assert pytest.approx(load_description_profile(a).left.D, rel=1e-9) == load_description_profile(b).left.D
+    assert pytest.approx(load_description_profile(a).right.D, rel=1e-9) == load_description_profile(b).right.D
