@@ -155,3 +155,21 @@ def test_camera_info_with_a_flat_distortion_list(tmp_path: Path) -> None:
     p = load_any([left, right])
     assert p.left.distortion.coefficients[0] == -0.173831269260396
     assert p.baseline_m == pytest.approx(0.1, abs=1e-12)
+
+
+def test_kimera_d455_pair() -> None:
+    """|p_right - p_left| in the body frame = |(0.06917448 + 0.02647408, 0.00427303 - 0.00914898,
+    0.01451117 - 0.02575617)| = |(0.09564856, -0.00487595, -0.011245)| = 0.0964307 m."""
+    d = FIX / "kimera_d455"
+    p = load_any([d / "LeftCameraParams.yaml", d / "RightCameraParams.yaml"])
+    assert (p.left.fx_px, p.left.cx_px, p.right.fy_px) == (377.229220831, 326.351864976, 384.44298975213155)
+    assert p.left.distortion.coefficients == (-0.00439906, -0.00467669, 0.00017386, 0.00324217, 0.0)
+    assert p.baseline_m == pytest.approx(0.0964307, abs=1e-7)
+
+
+@pytest.mark.parametrize("resolution, fx, size", [(None, 534.25, (1280, 720)), ((2208, 1242), 1068.5, (2208, 1242))])
+def test_zed_conf_with_2k_and_hd(resolution: tuple[int, int] | None, fx: float, size: tuple[int, int]) -> None:
+    """Baseline = |(120.14, 0.0942712, -0.234404)| mm = 120.14027 mm at every resolution."""
+    p = load_any(FIX / "zed_SN_sample_2k_hd.conf", resolution=resolution)
+    assert (p.left.fx_px, p.image_size) == (fx, size)
+    assert p.baseline_m == pytest.approx(0.12014027, abs=1e-8)
