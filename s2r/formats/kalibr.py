@@ -70,16 +70,17 @@ def _camera(data: dict[Any, Any], key: str, path: Path) -> Camera:
     if not isinstance(raw, list):
         raise FormatError("expected a list of numbers", path=path, field=field)
     coeffs = as_matrix(raw, (len(raw),), path, field)
-    if dist_model == "radtan":
-        if len(coeffs) != 4:
-            raise FormatError(f"radtan needs 4 coefficients (k1 k2 r1 r2), got {len(coeffs)}", path=path, field=field)
-        distortion = distortion_for("plumb_bob", [*coeffs.tolist(), 0.0], path, field)
+    if dist_model in ("radtan", "plumb_bob"):  # plumb_bob: hand-written chains with ROS's name, k3 allowed
+        if len(coeffs) != 4 and not (dist_model == "plumb_bob" and len(coeffs) == 5):
+            allowed = "4 coefficients (k1 k2 r1 r2)" + (" or 5 (+ k3)" if dist_model == "plumb_bob" else "")
+            raise FormatError(f"{dist_model} needs {allowed}, got {len(coeffs)}", path=path, field=field)
+        distortion = distortion_for("plumb_bob", [*coeffs.tolist(), 0.0][:5], path, field)
     elif dist_model == "equidistant":
         distortion = distortion_for("equidistant", coeffs.tolist(), path, field)
     elif dist_model == "none":
         distortion = distortion_for("plumb_bob", [], path, field)
     else:
-        raise FormatError(f"distortion model {dist_model!r} is not supported (radtan, equidistant, none)",
+        raise FormatError(f"distortion model {dist_model!r} is not supported (radtan, plumb_bob, equidistant, none)",
                           path=path, field=f"{key}.distortion_model")
     K = np.array([[fu, 0.0, pu], [0.0, fv, pv], [0.0, 0.0, 1.0]])
     return build_camera(K=K, size=(width, height), distortion=distortion, path=path, field=f"{key}.intrinsics")

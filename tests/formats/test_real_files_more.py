@@ -173,3 +173,21 @@ def test_zed_conf_with_2k_and_hd(resolution: tuple[int, int] | None, fx: float, 
     p = load_any(FIX / "zed_SN_sample_2k_hd.conf", resolution=resolution)
     assert (p.left.fx_px, p.image_size) == (fx, size)
     assert p.baseline_m == pytest.approx(0.12014027, abs=1e-8)
+
+
+def test_camchain_with_ros_plumb_bob_name_and_k3(tmp_path: Path) -> None:
+    """A public multi-camera rig's camchain names the model plumb_bob with 5 coefficients (k1 k2 p1 p2 k3): both
+    cameras' entries as published, with a 0.2 m T_cn_cnm1 added (the excerpt has no extrinsics)."""
+    path = tmp_path / "camchain.yaml"
+    path.write_text(
+        "cam0:\n  camera_model: pinhole\n  intrinsics: [907.580626, 908.178933, 800.913073, 678.792363]\n"
+        "  distortion_model: plumb_bob\n  distortion_coeffs: [0.033815, -0.047453, 0.000617, -0.000162, 0.000000]\n"
+        "  resolution: [1600, 1300]\n"
+        "cam1:\n  T_cn_cnm1:\n  - [1, 0, 0, -0.2]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 0, 0, 1]\n"
+        "  camera_model: pinhole\n  intrinsics: [910.6291839000, 910.7125457000, 786.7107435000, 625.9050966000]\n"
+        "  distortion_model: plumb_bob\n"
+        "  distortion_coeffs: [0.0472140054, -0.0720803351, 0.0002088803, -0.0001783977, 0.0114996117]\n"
+        "  resolution: [1600, 1300]\n")
+    p = load_any(path)
+    assert p.right.distortion.coefficients == (0.0472140054, -0.0720803351, 0.0002088803, -0.0001783977, 0.0114996117)
+    assert p.left.fx_px == 907.580626 and p.baseline_m == 0.2
