@@ -27,7 +27,7 @@ from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.quality.board import BoardView, find_board, normalised_rays, roi_mask
-from s2r.quality.metrics import FrameQuality, frame_quality, temporal_noise_pct
+from s2r.quality.metrics import MISMATCH_NOTE_PCT, FrameQuality, frame_quality, plane_depth, temporal_noise_pct
 from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, summarise_bins
 
 __all__ = ["REPEAT_PX", "DepthView", "QualityResult", "measure_board_views", "measure_wall_views"]
@@ -96,22 +96,41 @@ class _Repeats:
 
 
 def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb: float
-                 ) -> tuple[FrameQuality, NDArray[np.bool_]]:
+                 ) -> tuple[FrameQuality, NDArray[np.bool_], tuple[float, float] | None]:
+    """The frame's metrics on the board's ROI, the ROI mask, and the board's (nearest, farthest) depth in metres
+    over the ROI from its PnP plane (None when the plane misses every ray)."""
     h, w = view.depth_m.shape
     mask = roi_mask(board.corners, pattern, (w, h))
     ys, xs = np.nonzero(mask)
     rays = normalised_rays(np.column_stack([xs, ys]).astype(np.float64), view.K, view.D)
-    return frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane), mask
+    truth_z = plane_depth(board.plane, rays)
+    finite = truth_z[np.isfinite(truth_z)]
+    span = (float(finite.min()), float(finite.max())) if finite.size else None
+    quality = frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane)
+    return quality, mask, span
 
 
-def _range_note(quality: FrameQuality, visible_m: tuple[float, float] | None) -> FrameQuality:
-    d = quality.distance_m
-    if visible_m is None or d is None or visible_m[0] <= d <= visible_m[1]:
+def _range_note(quality: FrameQuality, span_m: tuple[float, float] | None,
+                visible_m: tuple[float, float] | None) -> FrameQuality:
+    """Warn (log and the frame's note) when any part of the board lies outside the matcher's depth range.
+
+    The whole board's depth span counts, not its median distance: a board tilted towards the camera can sit at
+    a median inside the range while its near edge needs more disparities than the matcher searches, and
+    there SGBM returns mismatches that read as enormous noise rather than as "too near".
+    """
+    if visible_m is None or span_m is None:
         return quality
-    note = (f"board at {d:.3f} m is outside the matcher's {visible_m[0]:.3f}-{visible_m[1]:.1f} m: its depth "
-            "is mismatched, not noisy (raise num_disparities / lower matcher.min_depth_m)")
+    near, far = visible_m
+    if span_m[0] < near:
+        where = f"its nearest part at {span_m[0]:.3f} m is nearer than the matcher sees ({near:.3f} m)"
+    elif span_m[1] > far:
+        where = f"its farthest part at {span_m[1]:.2f} m is beyond the matcher's {far:.1f} m"
+    else:
+        return quality
+    note = (f"board {where}: its depth there is mismatched, not noisy "
+            "(raise num_disparities / lower matcher.min_depth_m)")
     log.warning("%s: %s", quality.image, note)
-    return FrameQuality(**{**quality.as_dict(), "note": note})
+    return FrameQuality(**{**quality.as_dict(), "note": "; ".join(filter(None, [note, quality.note]))})
 
 
 def _check_shapes(view: DepthView) -> None:
@@ -140,8 +159,10 @@ def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, p
                                        note=f"no {pattern[0]}x{pattern[1]} chessboard found"))
             poses.append(None)
         else:
-            quality, mask = _score_board(view, board, pattern, fb_px_m)
-            quality = _range_note(quality, visible_m)
+            quality, mask, span = _score_board(view, board, pattern, fb_px_m)
+            quality = _range_note(quality, span, visible_m)
+            if quality.outlier_pct is not None and quality.outlier_pct > MISMATCH_NOTE_PCT:
+                log.warning("%s: %s", quality.image, quality.note)
             group = repeats.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m)
             frames.append(FrameQuality(**{**quality.as_dict(), "pose_group": group}))
             poses.append(board.T_cam_board)

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from s2r.errors import SourceError
+from s2r.sources.isolation import Limits, run_limited
 from s2r.sources.xacro_sandbox import UnsafeXacro, sandbox
 
 __all__ = ["PACKAGE_PATH_ENV", "expand_xacro", "find_package", "is_xacro", "package_search_roots"]
@@ -117,26 +118,41 @@ def _root_cause(exc: BaseException) -> BaseException:
 
 
 def expand_xacro(
-    path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = ()
+    path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (),
+    limits: Limits | None = None,
 ) -> str:
-    """Expand the xacro file ``path`` to URDF/SDF XML text.
+    """Expand the xacro file ``path`` to URDF/SDF XML text, in a child process under ``limits``.
 
     Args:
         path: the ``.xacro`` file.
         xacro_args: ``<xacro:arg>`` values, as ``name:=value`` on the xacro command line.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
+        limits: CPU, memory and wall-clock limits of the expansion (default :class:`Limits`).
 
     Raises:
-        SourceError: unresolved ``$(find)``, an undefined argument, or any other xacro failure.
+        SourceError: unresolved ``$(find)``, an undefined argument, a refused expression, a limit overrun,
+            or any other xacro failure.
     """
+    mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
+    paths = tuple(Path(p) for p in package_paths)
+    return run_limited(lambda: _expand_here(Path(path), mappings, paths), path=Path(path),
+                       what="xacro expansion", limits=limits or Limits())
+
+
+def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[Path]) -> str:
+    """:func:`expand_xacro` in this process (the sandbox applies; no resource limits)."""
     import xacro
 
-    mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
     try:
         with _find_resolver(package_paths), sandbox(Path(path), package_paths), _quiet_xacro():
             doc = xacro.process_file(str(Path(path).resolve()), mappings=mappings)
     except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
         cause = _root_cause(exc)
+        if isinstance(cause, MemoryError):
+            raise MemoryError from None  # the isolation layer names the memory limit
+        if isinstance(cause, RecursionError):
+            raise SourceError("xacro expansion recursed too deeply (a macro that calls itself?)", path=path,
+                              field="xacro", hint="fix the macro's recursion") from None
         if isinstance(cause, PackageNotFound):
             raise SourceError(f"package {cause.package!r} not found in any package folder", path=path,
                               field=f"$(find {cause.package})", hint=_FIND_HINT) from None

@@ -30,3 +30,18 @@ def test_real_set_depth_on_the_board(tmp_path: Path, capsys: pytest.CaptureFixtu
         assert abs(f["z_accuracy_pct"]) < 1.0
         assert f["plane_fit_rms_pct"] < 2.0 and f["subpixel_rms_px"] < 2.0
         assert f["fill_rate_pct"] > 40.0
+    # the same frames with too few disparities: left08's board (median 0.30 m, tilted) has a near edge the
+    # matcher cannot reach; its plane-fit RMS then explodes, and the frame must say why rather than read as noise
+    code = main(["-q", "depth-quality", str(profile), "--left", str(data / "left08.jpg"), "--right",
+                 str(data / "right08.jpg"), "--pattern", "9x6", "--square", "0.025", "--num-disparities", "160",
+                 "--json"])
+    assert code in (0, 1)
+    (frame,) = json.loads(capsys.readouterr().out)["frames"]
+    assert "nearer than the matcher sees" in (frame.get("note") or "")
+    # at 208 the whole board is inside the range, but a tenth of it is matched a chessboard period off
+    # (measured: plane-fit RMS 36 %, outliers 10.7 %; 0.74 % and 0.1 % at 256): the note says they are mismatches
+    code = main(["-q", "depth-quality", str(profile), "--left", str(data / "left08.jpg"), "--right",
+                 str(data / "right08.jpg"), "--pattern", "9x6", "--square", "0.025", "--num-disparities", "208",
+                 "--json"])
+    (frame,) = json.loads(capsys.readouterr().out)["frames"]
+    assert frame["outlier_pct"] > 5.0 and "mismatches" in frame["note"]
