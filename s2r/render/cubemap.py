@@ -75,11 +75,17 @@ def _equidistant_theta(D: FloatArray, theta_d: FloatArray) -> tuple[FloatArray, 
     falling = np.nonzero(poly(grid)[1] <= 0)[0]
     theta_end = float(grid[falling[0] - 1]) if len(falling) else _THETA_LIMIT
     theta_d_end = float(poly(np.array([theta_end]))[0][0])
-    theta = np.clip(theta_d, 0.0, theta_end)
+    inside = theta_d < theta_d_end
+    theta = np.full(theta_d.shape, theta_end)
+    t = theta_d[inside].copy()
     for _ in range(_NEWTON_STEPS):
-        value, slope = poly(theta)
-        theta = np.clip(theta - (value - theta_d) / np.maximum(slope, 1e-9), 0.0, theta_end)
-    valid = (theta_d < theta_d_end) & (np.abs(poly(theta)[0] - theta_d) < 1e-9)
+        value, slope = poly(t)
+        step = (value - theta_d[inside]) / np.maximum(slope, 1e-9)
+        t = np.clip(t - step, 0.0, theta_end)
+        if float(np.max(np.abs(step), initial=0.0)) < 1e-13:
+            break
+    theta[inside] = t
+    valid = inside & (np.abs(poly(theta)[0] - theta_d) < 1e-9)
     return theta, valid
 
 
