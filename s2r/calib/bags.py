@@ -26,6 +26,7 @@ from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError, S2RError
 from s2r.fileio import sha256_file
+from s2r.imageio import oversize_reason
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
 from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
@@ -72,6 +73,8 @@ def bag_image_topics(reader: Any) -> list[str]:
 def _grey(msg: Any, msgtype: str) -> NDArray[np.uint8]:
     from rosbags.image import compressed_image_to_cvimage, message_to_cvimage
 
+    if msgtype.endswith("CompressedImage") and (reason := oversize_reason(bytes(msg.data[:65536]))):
+        raise CalibrationError(f"an image message: {reason}", field="--left-topic", hint="record sane images")
     image = compressed_image_to_cvimage(msg) if msgtype.endswith("CompressedImage") else message_to_cvimage(msg)
     image = np.asarray(image)
     if image.ndim == 3:

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.bags import bag_image_topics, open_bag
 from s2r.errors import DepthError
+from s2r.imageio import oversize_reason
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, depth_from_array
 
 __all__ = ["BagPair", "bag_pairs", "decode_depth", "decode_image"]
@@ -30,6 +31,8 @@ def decode_image(msg: Any, msgtype: str) -> NDArray[np.uint8]:
     """An image message as 8-bit BGR (H, W, 3) or grey (H, W); 16-bit infrared is scaled by 1/256."""
     from rosbags.image import compressed_image_to_cvimage, message_to_cvimage
 
+    if msgtype.endswith("CompressedImage") and (reason := oversize_reason(bytes(msg.data[:65536]))):
+        raise DepthError(f"an image message: {reason}", field="--left-topic", hint="record sane images")
     image = np.asarray(compressed_image_to_cvimage(msg) if msgtype.endswith("CompressedImage")
                        else message_to_cvimage(msg))
     if image.dtype == np.uint16:
