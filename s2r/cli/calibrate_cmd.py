@@ -80,6 +80,11 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
     return lens, None
 
 
+#: Largest chessboard square accepted (m): printed boards have squares of millimetres to ~0.2 m; beyond a
+#: metre the value is millimetres or a typo, and 1e308 overflows the float32 board model.
+MAX_SQUARE_M = 2.0
+
+
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     try:
         pattern = parse_pattern(args.pattern)
@@ -88,11 +93,14 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not args.square > 0:
         raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
                                hint="give the square edge in metres, e.g. 0.025")
+    if not args.square <= MAX_SQUARE_M:
+        raise CalibrationError(f"square size {args.square:g} m is over {MAX_SQUARE_M:g} m", field="--square",
+                               hint="--square is the square edge in metres; for 25 mm give --square 0.025")
     if args.jobs is not None and args.jobs < 1:
         raise CalibrationError(f"--jobs must be at least 1, got {args.jobs}", field="--jobs")
     if args.every < 1:
         raise CalibrationError(f"--every must be at least 1, got {args.every}", field="--every")
-    if args.max_error is not None and args.max_error <= 0:
+    if args.max_error is not None and not 0 < args.max_error < float("inf"):
         raise CalibrationError("--max-error must be positive", field="--max-error", hint="e.g. --max-error 1.0")
     if args.bag is not None and (args.left_topic is None or args.right_topic is None) and not args.mono:
         raise CalibrationError("--bag needs --left-topic and --right-topic", field="--left-topic",
