@@ -98,6 +98,9 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
                                hint="--square is the square edge in metres; for 25 mm give --square 0.025")
     if args.jobs is not None and args.jobs < 1:
         raise CalibrationError(f"--jobs must be at least 1, got {args.jobs}", field="--jobs")
+    if not 0 < args.max_dt < float("inf"):
+        raise CalibrationError(f"--max-dt must be positive seconds, got {args.max_dt}", field="--max-dt",
+                               hint="e.g. --max-dt 0.01")
     if args.every < 1:
         raise CalibrationError(f"--every must be at least 1, got {args.every}", field="--every")
     if args.max_error is not None and not 0 < args.max_error < float("inf"):
