@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.fileio import NotARegularFile, read_regular_file
 from s2r.profile import MAX_IMAGE_PX
 
 __all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log"]
@@ -29,6 +30,8 @@ _PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
 #: Largest image side decoded (px): the profile's bound on camera sides. A PNG of a few hundred kB can
 #: declare 30000x30000 px, which OpenCV would allocate (2.7 GB in colour) before finding the data short.
 MAX_SIDE_PX = MAX_IMAGE_PX
+#: Largest image file read (bytes): a 16384x16384 colour PNG of camera content is well below it.
+MAX_IMAGE_FILE_BYTES = 512 << 20
 _LOCK = threading.Lock()
 _STATE = {"depth": 0, "saved_fd": -1}
 
@@ -112,7 +115,9 @@ def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tu
     """
     path = Path(path)
     try:
-        data = path.read_bytes()
+        data = read_regular_file(path, limit=MAX_IMAGE_FILE_BYTES)
+    except NotARegularFile as exc:
+        return None, str(exc)
     except OSError as exc:
         return None, f"cannot read the file ({exc.strerror or exc})"
     if not data:
