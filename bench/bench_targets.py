@@ -12,7 +12,10 @@ calibrateCamera (CALIB_FIX_K3, the same k1 k2 p1 p2 as s2r's default) per camera
 CALIB_FIX_INTRINSIC on the corners both saw; fisheye: cv2.fisheye.calibrate per camera and
 cv2.fisheye.stereoCalibrate, which needs the same corners in every view (whole boards only).
 
-Usage: .venv/bin/python bench/bench_targets.py [--rigs charuco_pinhole,...] [--views 20] [--out DIR]
+Seeds: seed k renders new poses and picks lens/target variant k mod 3 (0: the rigs above; 1: milder, narrower
+lenses and other board sizes; 2: strong barrel / ~150-180 deg fisheyes and smaller tags).
+
+Usage: .venv/bin/python bench/bench_targets.py [--rigs charuco_pinhole,...] [--views 20] [--seeds 0,1,2] [--out DIR]
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import argparse
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -38,6 +42,39 @@ RIGS = {
     "chess_fisheye": lambda: rc.fisheye_rig(rc.chessboard_target(), "chess_fisheye"),
     "charuco_fisheye": lambda: rc.fisheye_rig(rc.charuco_target(), "charuco_fisheye"),
 }
+#: Per seed index: (lens focal scale, distortion, target arguments) - variant 0 is the rig above.
+_PINHOLE_LENSES = (
+    (1.0, None),
+    (1.15, (-0.08, 0.012, -0.0003, 0.0005, 0.0)),  # mild barrel, narrower
+    (0.85, (-0.34, 0.12, 0.0006, -0.0004, 0.0)),  # strong barrel, wider (~74 deg across)
+)
+_FISHEYE_LENSES = (
+    (1.0, None),  # T265-like, ~160 deg across the image circle
+    (0.87, (0.012, -0.006, 0.002, -0.0004)),  # ~180 deg: the whole image circle inside the frame height
+    (1.12, (-0.02, 0.01, -0.004, 0.0006)),  # ~150 deg across the width
+)
+_TARGETS = {
+    "charuco": ({}, {"squares": (9, 7), "square_m": 0.035, "marker_m": 0.026, "dictionary": "DICT_4X4_50"},
+                {"squares": (12, 9), "square_m": 0.025, "marker_m": 0.017, "dictionary": "DICT_6X6_250"}),
+    "aprilgrid": ({}, {"tags": (7, 5), "tag_m": 0.035, "spacing": 0.25}, {"tags": (6, 6), "tag_m": 0.028}),
+    "chess": ({}, {"inner": (8, 6), "square_m": 0.035}, {"inner": (10, 7), "square_m": 0.025}),
+}
+
+
+def variant(name: str, k: int) -> rc.Rig:
+    """Rig ``name`` with lens strength and target size number ``k`` (0 = the base rig)."""
+    kind, lens_kind = name.split("_")
+    maker = {"charuco": rc.charuco_target, "aprilgrid": rc.aprilgrid_target, "chess": rc.chessboard_target}[kind]
+    target = maker(**_TARGETS[kind][k % 3])  # type: ignore[operator]
+    fisheye = lens_kind == "fisheye"
+    rig = (rc.fisheye_rig if fisheye else rc.pinhole_rig)(target, f"{name}_v{k}")
+    scale, dist = (_FISHEYE_LENSES if fisheye else _PINHOLE_LENSES)[k % 3]
+
+    def lens(base: rc.Lens, sign: float) -> rc.Lens:
+        d = base.dist if dist is None else tuple(v * (1 + 0.05 * sign) for v in dist)
+        return replace(base, fx=base.fx * scale, fy=base.fy * scale, dist=d)
+
+    return replace(rig, left=lens(rig.left, 1.0), right=lens(rig.right, -1.0))
 _SUBPIX = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 
@@ -156,25 +193,27 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rigs", default=",".join(RIGS))
     ap.add_argument("--views", type=int, default=20)
-    ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--seeds", default="0,1,2", help="seeds; seed k also picks lens/target variant k mod 3")
     ap.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "s2r_bench_targets")
     args = ap.parse_args()
     bars = "bars: fx/fy within 0.2 %, cx/cy within 1.0 px, baseline within 0.3 %"
-    print(f"{'rig':<18} {'method':<13} {'focal err %':>11} {'pp err px':>9} {'baseline %':>10} {'time s':>7}  note")
+    print(f"{'rig':<18} {'seed':>4} {'method':<13} {'focal err %':>11} {'pp err px':>9} {'baseline %':>10} "
+          f"{'time s':>7}  note")
     for name in args.rigs.split(","):
-        rig = RIGS[name]()
-        folder = args.out / f"{name}_v{args.views}_s{args.seed}"
-        if not (folder / "right" / f"{args.views - 1:02d}.png").exists():
-            rc.write_rig(rig, folder, views=args.views, seed=args.seed)
-        target = target_from_mapping(yaml.safe_load((folder / "target.yaml").read_text()))
-        for method, fn in (("s2r", run_s2r), ("plain OpenCV", plain_opencv)):
-            try:
-                r = fn(folder, rig, target)
-            except Exception as exc:
-                print(f"{name:<18} {method:<13} failed: {str(exc).strip().splitlines()[-1][:80]}")
-                continue
-            print(f"{name:<18} {method:<13} {r['focal_pct']:>11.3f} {r['pp_px']:>9.2f} {r['baseline_pct']:>10.3f} "
-                  f"{r['seconds']:>7.1f}  {r['note']}", flush=True)
+        for seed in (int(v) for v in args.seeds.split(",")):
+            rig = variant(name, seed)
+            folder = args.out / f"{name}_v{args.views}_s{seed}"
+            if not (folder / "right" / f"{args.views - 1:02d}.png").exists():
+                rc.write_rig(rig, folder, views=args.views, seed=seed)
+            target = target_from_mapping(yaml.safe_load((folder / "target.yaml").read_text()))
+            for method, fn in (("s2r", run_s2r), ("plain OpenCV", plain_opencv)):
+                try:
+                    r = fn(folder, rig, target)
+                except Exception as exc:
+                    print(f"{name:<18} {seed:>4} {method:<13} failed: {str(exc).strip().splitlines()[-1][:80]}")
+                    continue
+                print(f"{name:<18} {seed:>4} {method:<13} {r['focal_pct']:>11.3f} {r['pp_px']:>9.2f} "
+                      f"{r['baseline_pct']:>10.3f} {r['seconds']:>7.1f}  {r['note']}", flush=True)
     print(bars + " (worst of both cameras)")
 
 

@@ -18,6 +18,8 @@ import yaml
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
+    "MAX_TEXT_BYTES",
+    "NotARegularFile",
     "StrictSafeLoader",
     "atomic_write_bytes",
     "atomic_write_npy",
@@ -26,6 +28,7 @@ __all__ = [
     "check_output_free",
     "parse_yaml",
     "prepare_output_dir",
+    "read_regular_file",
     "read_text_file",
     "run_xml_parser",
     "safe_xml_parser",
@@ -203,15 +206,53 @@ def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
     return digest.hexdigest()
 
 
+#: Largest text input read (bytes): calibration and description files are kilobytes; the largest robot
+#: descriptions a few megabytes.
+MAX_TEXT_BYTES = 64 << 20
+
+
+class NotARegularFile(ValueError):
+    """An input path that is a device, FIFO or socket, or a file over the size limit (the message says which)."""
+
+
+def read_regular_file(path: str | Path, *, limit: int) -> bytes:
+    """The bytes of the regular file ``path``, refusing anything that could read forever or block.
+
+    ``/dev/zero`` or ``/dev/urandom`` never end, a FIFO blocks until someone writes: the file is opened without
+    blocking and checked with ``fstat`` before a byte is read; a regular file over ``limit`` bytes is refused
+    from its size.
+
+    Raises:
+        NotARegularFile: a device, FIFO or socket, or a file over ``limit`` bytes.
+        OSError: missing, unreadable, a folder.
+    """
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+        if not stat.S_ISREG(info.st_mode):
+            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+        if info.st_size > limit:
+            raise NotARegularFile(f"{info.st_size} bytes, over the {limit >> 20} MiB s2r reads for this input")
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            return fh.read(limit + 1)[:limit]
+    finally:
+        os.close(fd)
+
+
 def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str:
-    """A file's UTF-8 text; ``error`` (one line naming the file) when it is missing or unreadable."""
+    """A file's UTF-8 text; ``error`` (one line naming the file) when it is missing, unreadable, not a regular
+    file or over :data:`MAX_TEXT_BYTES`."""
     source = Path(path)
     try:
-        return source.read_text(encoding="utf-8")
+        return read_regular_file(source, limit=MAX_TEXT_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise error("file not found", path=source, hint="check the path") from None
     except IsADirectoryError:
         raise error("is a folder, not a file", path=source, hint="pass the file inside it") from None
+    except NotARegularFile as exc:
+        raise error(str(exc), path=source, hint="pass a calibration or description file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
 

@@ -21,9 +21,17 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["decode_image_file", "silence_opencv_log"]
+from s2r.fileio import NotARegularFile, read_regular_file
+from s2r.profile import MAX_IMAGE_PX
+
+__all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log"]
 
 _PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
+#: Largest image side decoded (px): the profile's bound on camera sides. A PNG of a few hundred kB can
+#: declare 30000x30000 px, which OpenCV would allocate (2.7 GB in colour) before finding the data short.
+MAX_SIDE_PX = MAX_IMAGE_PX
+#: Largest image file read (bytes): a 16384x16384 colour PNG of camera content is well below it.
+MAX_IMAGE_FILE_BYTES = 512 << 20
 _LOCK = threading.Lock()
 _STATE = {"depth": 0, "saved_fd": -1}
 
@@ -67,6 +75,39 @@ def _truncated(data: bytes) -> str:
     return ""
 
 
+def declared_size(data: bytes) -> tuple[int, int] | None:
+    """(width, height) a PNG or JPEG header declares, before anything is decoded; None for other formats or a
+    header too short to tell (OpenCV then judges the file)."""
+    if data.startswith(_PNG_MAGIC) and len(data) >= 24 and data[12:16] == b"IHDR":
+        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    if not data.startswith(_JPEG_MAGIC):
+        return None
+    pos = 2
+    while pos + 9 <= len(data):  # walk the marker segments up to the first start-of-frame (SOF0..SOF15)
+        if data[pos] != 0xFF:
+            return None
+        marker = data[pos + 1]
+        if marker in (0xD8, 0x01) or 0xD0 <= marker <= 0xD7:
+            pos += 2
+            continue
+        if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):
+            return int.from_bytes(data[pos + 7:pos + 9], "big"), int.from_bytes(data[pos + 5:pos + 7], "big")
+        pos += 2 + int.from_bytes(data[pos + 2:pos + 4], "big")
+    return None
+
+
+def oversize_reason(data: bytes) -> str:
+    """Why the image's declared size is refused ('' when acceptable or unknown)."""
+    size = declared_size(data)
+    if size is None:
+        return ""
+    w, h = size
+    if w > MAX_SIDE_PX or h > MAX_SIDE_PX:
+        return (f"the header declares {w}x{h} px, larger than s2r reads ({MAX_SIDE_PX} px a side): a "
+                "decompression bomb or a wrong file")
+    return ""
+
+
 def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tuple[NDArray[Any] | None, str]:
     """``(image, "")`` for a readable image file, else ``(None, reason in plain words)``.
 
@@ -74,12 +115,14 @@ def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tu
     """
     path = Path(path)
     try:
-        data = path.read_bytes()
+        data = read_regular_file(path, limit=MAX_IMAGE_FILE_BYTES)
+    except NotARegularFile as exc:
+        return None, str(exc)
     except OSError as exc:
         return None, f"cannot read the file ({exc.strerror or exc})"
     if not data:
         return None, "the file is empty"
-    reason = _truncated(data)
+    reason = _truncated(data) or oversize_reason(data)
     if reason:
         return None, reason
     with _native_stderr_silenced():

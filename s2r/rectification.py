@@ -6,6 +6,7 @@ camera_info export all rectify through :func:`stereo_rectification`, so they agr
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,9 +17,13 @@ from numpy.typing import NDArray
 from s2r.errors import S2RError
 from s2r.profile import StereoProfile
 
-__all__ = ["StereoRectification", "stereo_rectification"]
+__all__ = ["DEFAULT_FISHEYE_FOV_DEG", "StereoRectification", "stereo_rectification"]
 
 FloatArray = NDArray[np.float64]
+
+#: Horizontal field of view (degrees) of a fisheye pair's rectified images when OpenCV's balance would give a
+#: wider one: a rectified (pinhole) image of a near-180-degree lens spends almost all its pixels on the rim.
+DEFAULT_FISHEYE_FOV_DEG = 90.0
 
 
 @dataclass(frozen=True)
@@ -63,18 +68,46 @@ class StereoRectification:
         return depth.astype(np.float32)
 
 
+def _fisheye_field(P1: FloatArray, P2: FloatArray, out_size: tuple[int, int], fov_deg: float | None
+                   ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+    """P1, P2, Q of rectified cameras with ``fov_deg`` horizontal field (principal point at the image centre), or
+    None to keep OpenCV's (``fov_deg`` None and OpenCV's field at most :data:`DEFAULT_FISHEYE_FOV_DEG`)."""
+    width, height = out_size
+    f_cv = float(P1[0, 0])
+    if fov_deg is None:
+        if 2.0 * math.degrees(math.atan(0.5 * width / f_cv)) <= DEFAULT_FISHEYE_FOV_DEG:
+            return None
+        fov_deg = DEFAULT_FISHEYE_FOV_DEG
+    f = 0.5 * width / math.tan(math.radians(fov_deg) / 2.0)
+    cx, cy = 0.5 * (width - 1), 0.5 * (height - 1)
+    tx = float(P2[0, 3]) / float(P2[0, 0])  # -baseline (m)
+    new1 = np.array([[f, 0.0, cx, 0.0], [0.0, f, cy, 0.0], [0.0, 0.0, 1.0, 0.0]])
+    new2 = new1.copy()
+    new2[0, 3] = f * tx
+    Q = np.array([[1.0, 0.0, 0.0, -cx], [0.0, 1.0, 0.0, -cy], [0.0, 0.0, 0.0, f], [0.0, 0.0, -1.0 / tx, 0.0]])
+    return new1, new2, Q
+
+
 def stereo_rectification(
-    profile: StereoProfile, *, alpha: float = 0.0, image_size: tuple[int, int] | None = None
+    profile: StereoProfile, *, alpha: float = 0.0, image_size: tuple[int, int] | None = None,
+    fov_deg: float | None = None,
 ) -> StereoRectification:
-    """Rectify ``profile`` with ``cv2.stereoRectify`` (CALIB_ZERO_DISPARITY).
+    """Rectify ``profile`` with ``cv2.stereoRectify`` (CALIB_ZERO_DISPARITY); fisheye (equidistant) pairs with
+    ``cv2.fisheye.stereoRectify`` (``alpha`` is its balance).
 
     Args:
         profile: the stereo profile (OpenCV extrinsics, metres).
         alpha: 0 keeps only valid pixels, 1 keeps every source pixel (black borders), as OpenCV.
         image_size: ``(width, height)`` of the rectified images; default the profile's.
+        fov_deg: fisheye pairs only: horizontal field of view (degrees, 10-170) of the rectified images, with
+            OpenCV's rotations R1 R2 and the principal point at the image centre. Default: OpenCV's balance
+            result, capped at :data:`DEFAULT_FISHEYE_FOV_DEG`.
     """
     if not (0.0 <= alpha <= 1.0 or alpha == -1.0):  # NaN fails both
         raise S2RError(f"rectification alpha must be in [0, 1] or -1, got {alpha}", field="alpha")
+    if fov_deg is not None and not 10.0 <= fov_deg <= 170.0:
+        raise S2RError(f"rectified field of view must be 10-170 degrees, got {fov_deg}", field="fov_deg",
+                       hint="e.g. 90")
     size = profile.image_size
     out_size = size if image_size is None else image_size
     roi1: Any
@@ -86,6 +119,10 @@ def stereo_rectification(
             profile.left.K, profile.left.D, profile.right.K, profile.right.D, size, profile.R, T,
             flags=cv2.CALIB_ZERO_DISPARITY, newImageSize=out_size, balance=alpha,
         )
+        chosen = _fisheye_field(np.asarray(P1, np.float64), np.asarray(P2, np.float64),
+                                (int(out_size[0]), int(out_size[1])), fov_deg)
+        if chosen is not None:
+            P1, P2, Q = chosen
         roi1 = roi2 = (0, 0, int(out_size[0]), int(out_size[1]))
     else:
         R1, R2, P1, P2, Q, roi1, roi2 = cv2.stereoRectify(

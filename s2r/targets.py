@@ -32,6 +32,7 @@ from s2r.fileio import parse_yaml, read_text_file
 
 __all__ = [
     "ARUCO_DICTIONARIES",
+    "DETECTOR_REVISION",
     "AprilGridTarget",
     "CharucoTarget",
     "CheckerboardTarget",
@@ -42,6 +43,10 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.integer[Any]]
+
+#: Revision of the corner detectors of file-described targets (s2r.calib.markers), part of the corner cache's
+#: key: bumped when their output changes, so cached detections of an older detector are not reused.
+DETECTOR_REVISION = 2
 
 #: OpenCV's predefined ArUco / AprilTag dictionaries (cv2.aruco.DICT_*), by name.
 ARUCO_DICTIONARIES: tuple[str, ...] = (

@@ -26,6 +26,7 @@ from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError, S2RError
 from s2r.fileio import sha256_file
+from s2r.imageio import oversize_reason
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
 from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
@@ -69,11 +70,30 @@ def bag_image_topics(reader: Any) -> list[str]:
     return sorted({c.topic for c in reader.connections if c.msgtype in IMAGE_TYPES})
 
 
-def _grey(msg: Any, msgtype: str) -> NDArray[np.uint8]:
+def image_from_message(msg: Any, msgtype: str, *, error: type[S2RError] = CalibrationError,
+                       topic: str = "--left-topic") -> NDArray[Any]:
+    """An ``Image`` / ``CompressedImage`` message as an OpenCV array (as rosbags decodes it), or ``error`` in one
+    line: a compressed image whose header declares more than 16384 px a side is refused before decoding, and
+    a raw image whose data do not fill its declared size or whose encoding is unknown is named."""
     from rosbags.image import compressed_image_to_cvimage, message_to_cvimage
 
-    image = compressed_image_to_cvimage(msg) if msgtype.endswith("CompressedImage") else message_to_cvimage(msg)
-    image = np.asarray(image)
+    compressed = msgtype.endswith("CompressedImage")
+    if compressed and (reason := oversize_reason(bytes(msg.data[:65536]))):
+        raise error(f"an image message: {reason}", field=topic, hint="record sane images")
+    try:
+        image = compressed_image_to_cvimage(msg) if compressed else message_to_cvimage(msg)
+    except Exception as exc:  # rosbags raises TypeError, ValueError, ImageFormatError, cv2.error
+        size = "" if compressed else f" ({getattr(msg, 'width', '?')}x{getattr(msg, 'height', '?')} " \
+                                     f"{getattr(msg, 'encoding', '?')}, {len(getattr(msg, 'data', b''))} bytes)"
+        raise error(f"an image message{size} cannot be decoded: {exc}", field=topic,
+                    hint="check the topic's encoding and that its messages are complete") from None
+    if image is None:
+        raise error("a compressed image message is not a readable image", field=topic, hint="check the topic")
+    return np.asarray(image)
+
+
+def _grey(msg: Any, msgtype: str) -> NDArray[np.uint8]:
+    image = image_from_message(msg, msgtype)
     if image.ndim == 3:
         image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
     if image.dtype != np.uint8:

@@ -212,8 +212,10 @@ class CornerCache:
 
     def __init__(self, folder: Path, target: AnyTarget | None = None) -> None:
         self.folder = Path(folder)
+        if target is not None:
+            from s2r.targets import DETECTOR_REVISION
         self.target_key = "" if target is None else hashlib.sha256(
-            target.model_dump_json().encode()).hexdigest()[:16]
+            f"{DETECTOR_REVISION}|{target.model_dump_json()}".encode()).hexdigest()[:16]
         self.remove_stale_temporaries()
 
     def remove_stale_temporaries(self, max_age_s: float = 60.0) -> int:

@@ -16,19 +16,16 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
 
 from s2r.calib.coverage import coverage_of, coverage_warnings
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.fisheye import FISHEYE
-from s2r.calib.lens import DEFAULT_LENS, LensModel, lens_model
+from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.mono import MonoCalibration
-from s2r.calib.observations import BoardObservation, StereoObservation
+from s2r.calib.observations import StereoObservation
 from s2r.calib.pair import PairSolution
-from s2r.calib.pair import _joint as joint_pair_solution
-from s2r.calib.rig import RigInit
 from s2r.calib.solve import StereoSolution, outlier_threshold
 from s2r.calib.stereo import StereoCalibration, ViewError, _uncertainty_warnings
+from s2r.calib.target_joint import joint_solve, lens_model_of
 from s2r.calib.targetcal import (
     CameraViews,
     MonoFit,
@@ -173,68 +170,11 @@ def calibrate_stereo_target_detections(
         return _fixed_result(solved, fit_l, fit_r, size, target=target, lens=lens, distortion=distortion,
                              name=name, sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
                              detected=len(names))
-    joint_obs, sol = _joint_solve(names, obs_l, obs_r, keeps, fit_l, fit_r, views, lens=lens,
+    joint_obs, sol = joint_solve(names, obs_l, obs_r, keeps, fit_l, fit_r, views, lens=lens,
                                   distortion=distortion, max_error_px=max_error_px)
     return _joint_result(joint_obs, sol, views, size, target=target, lens=lens, distortion=distortion, name=name,
                          sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
                          detected=len(names), fit_l=fit_l)
-
-
-def _board(o: Observation) -> BoardObservation:
-    return BoardObservation(o.ids.astype(np.int64), o.obj.astype(np.float64), o.img.astype(np.float64))
-
-
-def _lens_model(lens: str, distortion: str) -> LensModel:
-    return FISHEYE if lens == "fisheye" else lens_model(distortion)
-
-
-def _joint_solve(names: Sequence[str], obs_l: list[Observation | None], obs_r: list[Observation | None],
-                 keeps: list[dict[int, int]], fit_l: MonoFit, fit_r: MonoFit, views: Sequence[PairView], *,
-                 lens: str, distortion: str, max_error_px: float | None
-                 ) -> tuple[list[StereoObservation], PairSolution]:
-    """The joint solve (:mod:`s2r.calib.joint`) of every view either camera kept, started from the mono fits:
-    R, T the consensus of the views both saw, each view's board pose from the left fit (or from the right
-    fit moved into the left camera)."""
-    R, T = _consensus([(fit_l.solution.rvecs[v.idx_l], fit_l.solution.tvecs[v.idx_l], fit_r.solution.rvecs[v.idx_r],
-                        fit_r.solution.tvecs[v.idx_r]) for v in views])
-    joint_obs, rv, tv = [], [], []
-    for k, n in enumerate(names):
-        left = _board(obs_l[k]) if k in keeps[0] and obs_l[k] is not None else None  # type: ignore[arg-type]
-        right = _board(obs_r[k]) if k in keeps[1] and obs_r[k] is not None else None  # type: ignore[arg-type]
-        if left is None and right is None:
-            continue
-        if left is not None:
-            r, t = fit_l.solution.rvecs[keeps[0][k]], fit_l.solution.tvecs[keeps[0][k]]
-        else:
-            Rr = cv2.Rodrigues(fit_r.solution.rvecs[keeps[1][k]])[0]
-            r = np.asarray(cv2.Rodrigues(R.T @ Rr)[0], np.float64).reshape(3)
-            t = R.T @ (fit_r.solution.tvecs[keeps[1][k]] - T)
-        joint_obs.append(StereoObservation(n, left, right))
-        rv.append(r)
-        tv.append(t)
-    init = RigInit(left=replace(fit_l.solution, rvecs=tuple(rv), tvecs=tuple(tv)), right=fit_r.solution, R=R, T=T,
-                   scores=())
-    sol = joint_pair_solution(joint_obs, list(range(len(joint_obs))), init, _lens_model(lens, distortion),
-                              max_error_px)
-    method = ("s2r calibrate --target: " if lens != "fisheye" else "s2r calibrate --lens fisheye: ") + \
-        ("OpenCV fisheye.calibrate" if lens == "fisheye" else "OpenCV calibrateCameraExtended") + \
-        " per camera on every view it saw, then one joint solve of both cameras, extrinsics and board poses " \
-        "on corners matched by id"
-    return joint_obs, replace(sol, method=method)
-
-
-def _consensus(poses: Sequence[tuple[NDArray[np.float64], ...]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Right-from-left motion: chordal mean rotation and median translation of the views' relative poses."""
-    Rs, Ts = [], []
-    for rl, tl, rr, tr in poses:
-        Rl, Rr = cv2.Rodrigues(rl)[0], cv2.Rodrigues(rr)[0]
-        Rs.append(Rr @ Rl.T)
-        Ts.append(tr - Rr @ Rl.T @ tl)
-    U, _, Vt = np.linalg.svd(np.mean(Rs, axis=0))
-    R = U @ Vt
-    if np.linalg.det(R) < 0:
-        R = U @ np.diag([1.0, 1.0, -1.0]) @ Vt
-    return np.asarray(R, np.float64), np.asarray(np.median(Ts, axis=0), np.float64)
 
 
 def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: Sequence[PairView],
@@ -242,7 +182,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
                   sources: Sequence[SourceFile], dropped: list[DroppedView], reordered: list[str],
                   obs: tuple[list[Observation | None], list[Observation | None]], detected: int,
                   fit_l: MonoFit) -> StereoCalibration:
-    model = _lens_model(lens, distortion)
+    model = lens_model_of(lens, distortion)
     used = {joint_obs[i].name for i in sol.keep}
     outliers = [ViewError(joint_obs[i].name, a, b, c, used=False, reason=why) for i, a, b, c, why in sol.outliers]
     dropped = [*dropped, *(DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in outliers)]

@@ -25,7 +25,8 @@ def register(sub: Any) -> None:
         description="Chessboard calibration into a real s2r profile, with per-view errors, outliers, "
                     "standard deviations, coverage and an optional HTML report.")
     p.add_argument("input", nargs="?", type=Path,
-                   help="folder with left/ and right/ subfolders, or with leftNN/rightNN image files")
+                   help="folder with left/ and right/ (or cam0/ cam1/, image_0/ image_1/) subfolders, or "
+                        "with leftNN/rightNN image files")
     p.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6)")
     p.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
     p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
@@ -80,6 +81,11 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
     return lens, None
 
 
+#: Largest chessboard square accepted (m): printed boards have squares of millimetres to ~0.2 m; beyond a
+#: metre the value is millimetres or a typo, and 1e308 overflows the float32 board model.
+MAX_SQUARE_M = 2.0
+
+
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     try:
         pattern = parse_pattern(args.pattern)
@@ -88,11 +94,17 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not args.square > 0:
         raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
                                hint="give the square edge in metres, e.g. 0.025")
+    if not args.square <= MAX_SQUARE_M:
+        raise CalibrationError(f"square size {args.square:g} m is over {MAX_SQUARE_M:g} m", field="--square",
+                               hint="--square is the square edge in metres; for 25 mm give --square 0.025")
     if args.jobs is not None and args.jobs < 1:
         raise CalibrationError(f"--jobs must be at least 1, got {args.jobs}", field="--jobs")
+    if not 0 < args.max_dt < float("inf"):
+        raise CalibrationError(f"--max-dt must be positive seconds, got {args.max_dt}", field="--max-dt",
+                               hint="e.g. --max-dt 0.01")
     if args.every < 1:
         raise CalibrationError(f"--every must be at least 1, got {args.every}", field="--every")
-    if args.max_error is not None and args.max_error <= 0:
+    if args.max_error is not None and not 0 < args.max_error < float("inf"):
         raise CalibrationError("--max-error must be positive", field="--max-error", hint="e.g. --max-error 1.0")
     if args.bag is not None and (args.left_topic is None or args.right_topic is None) and not args.mono:
         raise CalibrationError("--bag needs --left-topic and --right-topic", field="--left-topic",

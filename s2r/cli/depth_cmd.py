@@ -40,6 +40,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--alpha", type=float, default=0.0,
                         help="rectification alpha in [0, 1] (0 valid pixels only, 1 every source pixel) or -1 "
                         "(OpenCV's default)")
+    parser.add_argument("--fov", type=float, metavar="DEG",
+                        help="fisheye profiles: horizontal field of view of the rectified images in degrees "
+                        "(default: OpenCV's, at most 90)")
     parser.add_argument("--resize", action="store_true", help="accept other image sizes by rescaling intrinsics")
     parser.add_argument("--ply", action="store_true", help="also write a coloured point cloud (points.ply)")
     parser.add_argument("--keep-out-of-range", action="store_true",
@@ -58,7 +61,7 @@ def _pipeline(args: argparse.Namespace) -> StereoPipeline:
 
     post = None if args.postprocess is None else check_stages(args.postprocess)
     return StereoPipeline(args.profile, preset=args.preset, alpha=args.alpha, num_disparities=args.num_disparities,
-                          postprocess=post, resize=args.resize)
+                          postprocess=post, resize=args.resize, fov_deg=args.fov)
 
 
 def _cmd_depth(args: argparse.Namespace) -> int:

@@ -83,7 +83,9 @@ def _check_args(args: argparse.Namespace) -> None:
         raise DepthError(f"must be positive metres, got {args.square}", field="--square", hint="e.g. 0.025")
     if args.distance is not None and not args.distance > 0:
         raise DepthError(f"must be positive metres, got {args.distance}", field="--distance", hint="e.g. 1.5")
-    if args.depth_scale <= 0:
+    if not 0 < args.max_dt < float("inf"):
+        raise DepthError(f"must be positive seconds, got {args.max_dt}", field="--max-dt", hint="e.g. 0.01")
+    if not 0 < args.depth_scale < float("inf"):
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
 
 

@@ -87,6 +87,8 @@ class StereoPipeline:
         postprocess: stage names from :data:`s2r.depth.postprocess.STAGES`; None uses the preset's defaults.
         resize: accept images of another size by rescaling the intrinsics (``Camera.scaled``); otherwise a
             size mismatch is a :class:`DepthError`.
+        fov_deg: fisheye (equidistant) profiles: horizontal field of view of the rectified images, degrees;
+            None: OpenCV's balance ``alpha``, capped at ``s2r.rectification.DEFAULT_FISHEYE_FOV_DEG``.
 
     ``compute`` may be called from several threads at once (each thread gets its own OpenCV matcher).
     """
@@ -100,6 +102,7 @@ class StereoPipeline:
         num_disparities: int | None = None,
         postprocess: Sequence[str] | None = None,
         resize: bool = False,
+        fov_deg: float | None = None,
     ) -> None:
         if preset not in PRESETS:
             raise DepthError(f"unknown preset {preset!r}", field="preset", hint=f"choose one of {', '.join(PRESETS)}")
@@ -110,6 +113,7 @@ class StereoPipeline:
         self.postprocess: tuple[str, ...] = pp.check_stages(
             DEFAULT_POSTPROCESS[preset] if postprocess is None else postprocess)
         self.resize = resize
+        self.fov_deg = fov_deg
         self._lock = threading.Lock()
         self._local = threading.local()
         base = self._build(self.profile)
@@ -119,7 +123,7 @@ class StereoPipeline:
         self.config: MatcherConfig = base.config
 
     def _build(self, profile: StereoProfile) -> _Geometry:
-        rect = stereo_rectification(profile, alpha=self.alpha)
+        rect = stereo_rectification(profile, alpha=self.alpha, fov_deg=self.fov_deg)
         config = resolve_preset(self.preset, profile, fx_px=rect.fx_px, baseline_m=rect.baseline_m,
                                 num_disparities=self.num_disparities)
         return _Geometry(profile=profile, rectification=rect, maps=rectify_maps(profile, rect), config=config)

@@ -18,9 +18,10 @@ from s2r.errors import FormatError
 from s2r.formats._common import first_document, read_text, read_yaml
 from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr, strip_yaml_directive
 from s2r.formats.realsense import is_realsense_text, load_realsense
-from s2r.formats.ros import is_camera_info_mapping, load_ros_pair
+from s2r.formats.ros import camera_info_from_filestorage, is_camera_info_mapping, load_ros_pair
 from s2r.formats.s2r_yaml import load_profile_file
 from s2r.formats.zed import is_zed_conf, load_zed
+from s2r.geometry import baseline_layout_problem
 from s2r.profile import StereoProfile
 
 __all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any", "warn_implausible_baseline"]
@@ -68,7 +69,9 @@ def detect_format(path: str | Path) -> Format:
     if is_zed_conf(text):
         return "zed"
     if _is_opencv(text):
-        return "kalibr" if _is_kalibr_text(text, source) else "opencv"
+        if _is_kalibr_text(text, source):
+            return "kalibr"
+        return "ros" if _is_filestorage_camera_info(text, source) else "opencv"
     if _is_robot_description(source, text):
         raise FormatError("is a robot description (URDF / xacro / SDF), not a camera profile", path=source,
                           hint=f"derive a profile first: s2r profile from-urdf {source} -o profile.yaml")
@@ -87,6 +90,17 @@ def detect_format(path: str | Path) -> Format:
         return "ros"
     keys = ", ".join(sorted(str(k) for k in data)[:6])
     raise FormatError(f"unrecognised format (top-level keys: {keys}); {_EXPECTED}", path=source)
+
+
+def _is_filestorage_camera_info(text: str, path: Path) -> bool:
+    """A ROS camera_info written by OpenCV's FileStorage (``%YAML:1.0``, ``!!opencv-matrix`` camera_matrix):
+    image_width, camera_matrix, distortion_coefficients, rectification_matrix, projection_matrix."""
+    if "projection_matrix" not in text or "camera_matrix" not in text or text.lstrip().startswith("<"):
+        return False
+    try:
+        return is_camera_info_mapping(camera_info_from_filestorage(path))
+    except FormatError:
+        return False
 
 
 def _is_kalibr_text(text: str, path: Path) -> bool:
@@ -168,6 +182,9 @@ def load_any(
         profile = _load_single(files[0], fmts[0], name=name, origin=origin, image_size=image_size,
                                t_scale_m=t_scale_m, resolution=resolution, cameras=cameras)
     warn_implausible_baseline(profile, files[-1])
+    problem = baseline_layout_problem(-profile.R.T @ profile.T)
+    if problem is not None:  # the rule lint and from-urdf apply; --to ros refuses such a pair
+        log.warning("%s: ERROR [%s] %s: swap the left and right inputs", files[-1], *problem)
     return profile
 
 

@@ -33,7 +33,7 @@ NodeValue = str | float | NDArray[np.float64] | dict[str, Any]
 MAX_MATRIX_ELEMENTS = 1_000_000
 _DT = re.compile(r"^\s*([1-4]?)\s*([ucwsifdhr])\s*$")
 _NARROW_FLOATS: dict[str, type[np.floating[Any]]] = {"f": np.float32, "h": np.float16}
-_NO_SPACE_FLOW = re.compile(r"^(\s*[A-Za-z_][\w.]*):([\[{])")
+_NO_SPACE_VALUE = re.compile(r"^(\s*[A-Za-z_][\w.]*):(?=[^\s:])")
 _MATRIX_TAGS = ("tag:yaml.org,2002:opencv-matrix", "tag:yaml.org,2002:opencv-nd-matrix")
 
 
@@ -73,9 +73,9 @@ def _read_yaml(text: str, path: Path) -> dict[str, NodeValue | None]:
     lines = text.splitlines()
     if lines and lines[0].startswith("%YAML"):  # OpenCV writes "%YAML:1.0" (not YAML) or "%YAML 1.2"
         lines[0] = ""
-    # OpenCV's own parser accepts "data:[1, 2]" (no space after the colon; ORB-SLAM's EuRoC settings have it),
-    # YAML does not: put the space back before a flow sequence or map.
-    lines = [_NO_SPACE_FLOW.sub(r"\1: \2", line) for line in lines]
+    # OpenCV's own parser accepts "data:[1, 2]" and "Viewer.PointSize:2" (no space after the colon; ORB-SLAM3's
+    # EuRoC and TUM_512 settings have them), YAML does not: put the space back.
+    lines = [_NO_SPACE_VALUE.sub(r"\1: ", line) for line in lines]
     try:
         data = parse_yaml("\n".join(lines), path=path, error=FormatError, loader=_FileStorageLoader)
     except FormatError as exc:

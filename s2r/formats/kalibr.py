@@ -31,7 +31,7 @@ from s2r.formats._common import (
     require,
     rotation_as_printed,
 )
-from s2r.geometry import invert_transform
+from s2r.geometry import baseline_layout_problem, invert_transform
 from s2r.profile import Camera, StereoProfile
 
 __all__ = ["camera_entry", "dump_kalibr", "is_kalibr_mapping", "kalibr_to_yaml", "load_kalibr", "strip_yaml_directive"]
@@ -70,16 +70,17 @@ def _camera(data: dict[Any, Any], key: str, path: Path) -> Camera:
     if not isinstance(raw, list):
         raise FormatError("expected a list of numbers", path=path, field=field)
     coeffs = as_matrix(raw, (len(raw),), path, field)
-    if dist_model == "radtan":
-        if len(coeffs) != 4:
-            raise FormatError(f"radtan needs 4 coefficients (k1 k2 r1 r2), got {len(coeffs)}", path=path, field=field)
-        distortion = distortion_for("plumb_bob", [*coeffs.tolist(), 0.0], path, field)
+    if dist_model in ("radtan", "plumb_bob"):  # plumb_bob: hand-written chains with ROS's name, k3 allowed
+        if len(coeffs) != 4 and not (dist_model == "plumb_bob" and len(coeffs) == 5):
+            allowed = "4 coefficients (k1 k2 r1 r2)" + (" or 5 (+ k3)" if dist_model == "plumb_bob" else "")
+            raise FormatError(f"{dist_model} needs {allowed}, got {len(coeffs)}", path=path, field=field)
+        distortion = distortion_for("plumb_bob", [*coeffs.tolist(), 0.0][:5], path, field)
     elif dist_model == "equidistant":
         distortion = distortion_for("equidistant", coeffs.tolist(), path, field)
     elif dist_model == "none":
         distortion = distortion_for("plumb_bob", [], path, field)
     else:
-        raise FormatError(f"distortion model {dist_model!r} is not supported (radtan, equidistant, none)",
+        raise FormatError(f"distortion model {dist_model!r} is not supported (radtan, plumb_bob, equidistant, none)",
                           path=path, field=f"{key}.distortion_model")
     K = np.array([[fu, 0.0, pu], [0.0, fv, pv], [0.0, 0.0, 1.0]])
     return build_camera(K=K, size=(width, height), distortion=distortion, path=path, field=f"{key}.intrinsics")
@@ -121,12 +122,15 @@ def _right_from_left(data: dict[Any, Any], left: str, right: str, path: Path) ->
     """``T_right_left`` (OpenCV ``[R | T]``) and how it was obtained: the ``T_cn_cnm1`` chain from ``left`` up to
     ``right``, else ``T_right_imu @ inv(T_left_imu)``."""
     i, j = _index(left), _index(right)
-    if i is not None and j is not None and j > i and all("T_cn_cnm1" in data.get(f"cam{n}", {})
-                                                         for n in range(i + 1, j + 1)):
-        T = np.eye(4)
-        for n in range(i + 1, j + 1):
-            T = _transform(data, f"cam{n}", "T_cn_cnm1", path) @ T
-        return T, "T_cn_cnm1" if j == i + 1 else f"the T_cn_cnm1 chain cam{i + 1}..cam{j}"
+    if i is not None and j is not None and i != j:
+        lo, hi = min(i, j), max(i, j)
+        entries = [data.get(f"cam{n}") for n in range(lo + 1, hi + 1)]
+        if all(isinstance(e, dict) and "T_cn_cnm1" in e for e in entries):
+            T = np.eye(4)
+            for n in range(lo + 1, hi + 1):
+                T = _transform(data, f"cam{n}", "T_cn_cnm1", path) @ T
+            how = "T_cn_cnm1" if hi == lo + 1 else f"the T_cn_cnm1 chain cam{lo + 1}..cam{hi}"
+            return (T, how) if j > i else (invert_transform(T), f"the inverse of {how}")
     left_imu, right_imu = _cam_from_imu(data, left, path), _cam_from_imu(data, right, path)
     if left_imu is not None and right_imu is not None:
         return right_imu @ invert_transform(left_imu), "T_cam_imu of both cameras (T_c1_c0 = T_c1_imu inv(T_c0_imu))"
@@ -172,6 +176,14 @@ def load_kalibr(
     lkey, rkey = _choose(data, left, right, source)
     lcam, rcam = _camera(data, lkey, source), _camera(data, rkey, source)
     transform, how = _right_from_left(data, lkey, rkey, source)
+    position = invert_transform(transform)[:3, 3]  # the right camera's origin in the left optical frame
+    problem = baseline_layout_problem(position)
+    if left is None and right is None and problem is not None and problem[0] == "baseline-side":
+        # camN numbers are not sides (OpenVINS' Hilti and D435i chains list the right imager first)
+        log.warning("%s: %s is %.1f cm to the LEFT of %s: using %s as left and %s as right (choose with --left "
+                    "--right)", source, rkey, -position[0] * 100, lkey, rkey, lkey)
+        lkey, rkey, lcam, rcam = rkey, lkey, rcam, lcam
+        transform, how = _right_from_left(data, lkey, rkey, source)
     log.info("%s: left %s, right %s; extrinsics from %s", source, lkey, rkey, how)
     return build_stereo(
         name=name or source.stem, left=lcam, right=rcam, R=transform[:3, :3].copy(), T=transform[:3, 3].copy(),

@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from s2r.fileio import atomic_write_text, read_text_file
+from s2r.errors import S2RError
+from s2r.fileio import atomic_write_text, parse_yaml, read_text_file
 from s2r.profile import MonoProfile
 
 __all__ = ["dump_mono", "is_mono_profile_file", "mono_to_kalibr_yaml", "mono_to_ros_yaml"]
@@ -24,9 +25,9 @@ def is_mono_profile_file(path: str | Path) -> bool:
     if not source.is_file():
         return False
     try:
-        data = yaml.safe_load(read_text_file(source))
-    except (yaml.YAMLError, OSError, ValueError):
-        return False
+        data = parse_yaml(read_text_file(source), path=source)
+    except (S2RError, OSError):
+        return False  # the reader that handles the file reports what is wrong with it
     return isinstance(data, dict) and "schema_version" in data and "camera" in data and "left" not in data
 
 

@@ -234,6 +234,8 @@ def _distortion(coeffs: FloatArray, model: str | None, path: Path, field: str) -
         values = values[:8]  # OpenCV's thin-prism / tilt terms, all zero: the rational model
     if len(values) == 4:
         values = [*values, 0.0]  # k1 k2 p1 p2 without k3
+    if len(values) == 8 and not any(values[5:]):
+        values = values[:5]  # the rational model with k4 = k5 = k6 = 0 (MultiSense factory files): plumb_bob
     counts = {5: "plumb_bob", 8: "rational_polynomial"}
     if len(values) not in counts:
         raise FormatError(f"expected 4, 5 or 8 distortion coefficients, got {len(values)}", path=path, field=field,
@@ -267,7 +269,8 @@ def load_opencv(
     node_sets = [_read_nodes(p) for p in files]
     flavour = flavour_of(node_sets[0])
     if flavour is not None:  # ORB-SLAM, VINS-Fusion, Kimera-VIO settings: their own field names
-        return load_settings(files, node_sets, flavour, read_filestorage_nodes, name=name, origin=origin)
+        return load_settings(files, node_sets, flavour, read_filestorage_nodes, name=name, origin=origin,
+                             image_size=image_size)
     data = read_opencv_stereo(files)
     first = data.paths[0]
     size = data.image_size or image_size

@@ -249,16 +249,21 @@ def load_realsense(
     Args:
         resolution: ``(width, height)``; default 848x480 (Intel's recommended depth mode) or the only one.
         left, right: the stream names of the left and right imagers (``Infrared_1`` / ``Infrared_2``, as newer
-            librealsense prints them, are used when the file has no ``Infrared 1``).
+            librealsense prints them, or a T265's ``Fisheye 1`` / ``Fisheye 2`` are used when the file has no
+            ``Infrared 1``).
     """
     source = Path(path)
     text = read_text(source)
-    if (left, right) == ("Infrared 1", "Infrared 2") and f'"{left}"' not in text and '"Infrared_1"' in text:
-        left, right = "Infrared_1", "Infrared_2"  # newer librealsense names the streams with an underscore
+    if (left, right) == ("Infrared 1", "Infrared 2") and f'"{left}"' not in text:
+        for pair in (("Infrared_1", "Infrared_2"), ("Fisheye 1", "Fisheye 2"), ("Fisheye_1", "Fisheye_2")):
+            if f'"{pair[0]}"' in text:  # newer librealsense: underscores; a T265 has two fisheye imagers
+                left, right = pair
+                break
     intrinsics, extrinsics = parse_realsense(source, streams={left, right})
     size = _resolution(intrinsics, left, right, resolution, source)
-    lcam = _camera(_pick(intrinsics, left, size), source, "camera_infra1_optical_frame")
-    rcam = _camera(_pick(intrinsics, right, size), source, "camera_infra2_optical_frame")
+    kind = "fisheye" if left.lower().startswith("fisheye") else "infra"  # realsense2_camera's frame names
+    lcam = _camera(_pick(intrinsics, left, size), source, f"camera_{kind}1_optical_frame")
+    rcam = _camera(_pick(intrinsics, right, size), source, f"camera_{kind}2_optical_frame")
     R, T = _stereo_extrinsics(extrinsics, left, right, source)
     return build_stereo(
         name=name or f"realsense_{size[0]}x{size[1]}", left=lcam, right=rcam, R=R, T=T, path=source,

@@ -37,6 +37,7 @@ from s2r.formats._common import (
     require,
     rotation_as_printed,
 )
+from s2r.formats.filestorage import read_filestorage
 from s2r.geometry import baseline_layout_problem
 from s2r.profile import Camera, StereoProfile
 
@@ -97,7 +98,27 @@ def is_camera_info_mapping(data: Any) -> bool:
     return _is_parsers_layout(keys) or len(keys & {"K", "D", "R", "P", "k", "d", "r", "p"}) >= 2
 
 
+def _plain(value: Any) -> Any:
+    """FileStorage values as the parsers' YAML has them: arrays -> flat lists, whole floats in sizes -> int."""
+    if isinstance(value, np.ndarray):
+        return [float(v) for v in value.reshape(-1)]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def camera_info_from_filestorage(path: Path) -> dict[Any, Any]:
+    """A camera_info written by OpenCV's FileStorage (``%YAML:1.0``, ``!!opencv-matrix``) as a plain mapping."""
+    data = {k: _plain(v) for k, v in read_filestorage(path).items()}
+    for key in ("image_width", "image_height"):
+        if isinstance(data.get(key), float) and float(data[key]).is_integer():
+            data[key] = int(data[key])
+    return data
+
+
 def _parse_mapping(text: str, path: Path) -> dict[Any, Any]:
+    if text.lstrip().startswith("%YAML") or "opencv-matrix" in text:
+        return camera_info_from_filestorage(path)
     data = read_yaml(first_document(text), path)
     if not isinstance(data, dict):
         raise FormatError("expected a camera_info mapping (image_width, camera_matrix, ... or K:, P:)", path=path,

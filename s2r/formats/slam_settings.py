@@ -7,7 +7,8 @@
 - ORB-SLAM2 / old ORB-SLAM3 (``Camera.fx`` ... ``Camera.bf``): with ``LEFT.K/D/R/P`` and ``RIGHT.K/D/R/P`` the raw
   pair is recovered as from ROS camera_info (``R = R2^T R1``, ``T = R2^T (t2 - t1)``, ``t = K'^-1 P[:, 3]``);
   without them the images are already rectified: K from ``Camera.fx/fy/cx/cy``, no distortion, R = I and
-  ``T = (-bf / fx, 0, 0)`` metres.
+  ``T = (-bf / fx, 0, 0)`` metres. Early ORB-SLAM3 files with ``Camera.*``, ``Camera2.*`` and ``Tlr`` (right camera
+  in the left frame) are a raw pair: ``[R | T] = inv(Tlr)``.
 - VINS-Fusion: ``body_T_cam0`` / ``body_T_cam1`` (camera poses in the body/IMU frame) and ``cam0_calib`` /
   ``cam1_calib`` camera files (camodocal ``PINHOLE``: ``projection_parameters`` fx fy cx cy,
   ``distortion_parameters`` k1 k2 p1 p2) beside the config; ``[R | T] = inv(body_T_cam1) body_T_cam0``.
@@ -92,7 +93,14 @@ def _pose(nodes: Nodes, key: str, path: Path) -> FloatArray:
     return T
 
 
-def _size(nodes: Nodes, wkey: str, hkey: str, path: Path) -> tuple[int, int]:
+def _size(nodes: Nodes, wkey: str, hkey: str, path: Path,
+          fallback: tuple[int, int] | None = None) -> tuple[int, int]:
+    """Image size from ``wkey``/``hkey``; ``fallback`` (``--image-size``) when the file has neither."""
+    if fallback is not None and wkey not in nodes and hkey not in nodes:
+        return fallback
+    if wkey not in nodes:
+        raise FormatError("required field is missing (add it, or pass --image-size WIDTHxHEIGHT)", path=path,
+                          field=wkey)
     return as_int(_num(nodes, wkey, path), path, wkey), as_int(_num(nodes, hkey, path), path, hkey)
 
 
@@ -100,8 +108,8 @@ def _K(fx: float, fy: float, cx: float, cy: float) -> FloatArray:
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
 
-def _orbslam3_camera(nodes: Nodes, n: int, size: tuple[int, int], path: Path) -> Camera:
-    p = f"Camera{n}."
+def _orbslam3_camera(nodes: Nodes, p: str, size: tuple[int, int], path: Path) -> Camera:
+    """One camera of ORB-SLAM3 settings, its fields prefixed ``p`` (``Camera1.``, ``Camera2.``; ``Camera.``)."""
     K = _K(*(_num(nodes, p + k, path) for k in ("fx", "fy", "cx", "cy")))
     kind = str(nodes.get("Camera.type", "PinHole")).strip().strip('"')
     if kind == "KannalaBrandt8":
@@ -116,10 +124,10 @@ def _orbslam3_camera(nodes: Nodes, n: int, size: tuple[int, int], path: Path) ->
     return build_camera(K=K, size=size, distortion=distortion, path=path, field=p + "fx")
 
 
-def _orbslam3(nodes: Nodes, path: Path) -> tuple[Camera, Camera, FloatArray, str]:
+def _orbslam3(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[Camera, Camera, FloatArray, str]:
     kind = str(nodes.get("Camera.type", "PinHole")).strip().strip('"')
     if kind == "Rectified" and "Stereo.b" in nodes:  # already rectified images: one K, no distortion, baseline b
-        size = _size(nodes, "Camera.width", "Camera.height", path)
+        size = _size(nodes, "Camera.width", "Camera.height", path, hint)
         K = _K(*(_num(nodes, "Camera1." + k, path) for k in ("fx", "fy", "cx", "cy")))
         camera = build_camera(K=K, size=size, distortion=Distortion(), path=path, field="Camera1.fx")
         T = np.eye(4)
@@ -129,9 +137,9 @@ def _orbslam3(nodes: Nodes, path: Path) -> tuple[Camera, Camera, FloatArray, str
         raise FormatError("an ORB-SLAM3 settings file without Camera2 and Stereo.T_c1_c2 holds one camera (monocular "
                           "or rectified stereo: Stereo.b)", path=path, field="Camera2.fx",
                           hint="a stereo profile needs both cameras and Stereo.T_c1_c2")
-    size = _size(nodes, "Camera.width", "Camera.height", path)
+    size = _size(nodes, "Camera.width", "Camera.height", path, hint)
     T_c2_c1 = invert_transform(_pose(nodes, "Stereo.T_c1_c2", path))  # T_c1_c2 maps c2 points into c1
-    return (_orbslam3_camera(nodes, 1, size, path), _orbslam3_camera(nodes, 2, size, path), T_c2_c1,
+    return (_orbslam3_camera(nodes, "Camera1.", size, path), _orbslam3_camera(nodes, "Camera2.", size, path), T_c2_c1,
             "Stereo.T_c1_c2 (pose of camera 2 in camera 1, inverted)")
 
 
@@ -153,7 +161,20 @@ def _orbslam2_side(nodes: Nodes, side: str, path: Path) -> tuple[Camera, FloatAr
     return camera, R, _matrix(nodes, f"{side}.P", (3, 4), path)
 
 
-def _orbslam2(nodes: Nodes, path: Path) -> tuple[Camera, Camera, FloatArray, str]:
+def _orbslam3_old(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[Camera, Camera, FloatArray, str]:
+    """Early ORB-SLAM3 layout (TUM_512.yaml): ``Camera.*`` and ``Camera2.*`` and ``Tlr``, the 3x4 pose of the
+    right camera in the left one (it maps right points into the left frame): ``[R | T] = inv(Tlr)``."""
+    size = _size(nodes, "Camera.width", "Camera.height", path, hint)
+    T_l_r = np.eye(4)
+    T_l_r[:3, :] = _matrix(nodes, "Tlr", (3, 4), path)
+    T_l_r[:3, :3] = rotation_as_printed(T_l_r[:3, :3], path, "Tlr")
+    return (_orbslam3_camera(nodes, "Camera.", size, path), _orbslam3_camera(nodes, "Camera2.", size, path),
+            invert_transform(T_l_r), "Tlr (pose of the right camera in the left one, inverted)")
+
+
+def _orbslam2(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[Camera, Camera, FloatArray, str]:
+    if "Camera2.fx" in nodes and "Tlr" in nodes:
+        return _orbslam3_old(nodes, path, hint)
     if "LEFT.K" in nodes and "RIGHT.K" in nodes:
         left, R1, P1 = _orbslam2_side(nodes, "LEFT", path)
         right, R2, P2 = _orbslam2_side(nodes, "RIGHT", path)
@@ -167,7 +188,7 @@ def _orbslam2(nodes: Nodes, path: Path) -> tuple[Camera, Camera, FloatArray, str
                           path=path, field="Camera.bf", hint="a stereo profile needs the stereo settings file")
     fx = _num(nodes, "Camera.fx", path)
     K = _K(fx, _num(nodes, "Camera.fy", path), _num(nodes, "Camera.cx", path), _num(nodes, "Camera.cy", path))
-    size = _size(nodes, "Camera.width", "Camera.height", path)
+    size = _size(nodes, "Camera.width", "Camera.height", path, hint)
     camera = build_camera(K=K, size=size, distortion=Distortion(), path=path, field="Camera.fx")
     T = np.eye(4)
     T[0, 3] = -_num(nodes, "Camera.bf", path) / fx
@@ -229,8 +250,9 @@ def _kimera_camera(nodes: Nodes, path: Path) -> tuple[Camera, FloatArray]:
 
 
 def load_settings(paths: list[Path], node_sets: list[dict[str, Any]], flavour: str, read_nodes: ReadNodes, *,
-                  name: str | None, origin: str) -> StereoProfile:
-    """A stereo profile from SLAM settings (``flavour`` from :func:`flavour_of` on ``node_sets[0]``)."""
+                  name: str | None, origin: str, image_size: tuple[int, int] | None = None) -> StereoProfile:
+    """A stereo profile from SLAM settings (``flavour`` from :func:`flavour_of` on ``node_sets[0]``);
+    ``image_size`` for ORB-SLAM files without ``Camera.width/height``."""
     first = paths[0]
     if flavour in ("vins_camera", "kimera") and len(paths) != 2:
         raise FormatError(f"a {SETTINGS_FLAVOURS[flavour]} holds one camera; a stereo profile needs two", path=first,
@@ -239,9 +261,9 @@ def load_settings(paths: list[Path], node_sets: list[dict[str, Any]], flavour: s
     if len(paths) == 2 and flavour != "kimera":
         raise FormatError(f"a {SETTINGS_FLAVOURS[flavour]} is one file", path=paths[1], hint="pass it alone")
     if flavour == "orbslam3":
-        left, right, T, how = _orbslam3(node_sets[0], first)
+        left, right, T, how = _orbslam3(node_sets[0], first, image_size)
     elif flavour == "orbslam2":
-        left, right, T, how = _orbslam2(node_sets[0], first)
+        left, right, T, how = _orbslam2(node_sets[0], first, image_size)
     elif flavour == "vins":
         left, right, T, how = _vins(node_sets[0], first, read_nodes)
     else:

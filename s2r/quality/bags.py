@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.bags import bag_image_topics, open_bag
+from s2r.calib.bags import bag_image_topics, image_from_message, open_bag
 from s2r.errors import DepthError
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, depth_from_array
 
@@ -28,10 +28,7 @@ BagPair = tuple[str, Any, Any]  # (name, left payload, other payload)
 
 def decode_image(msg: Any, msgtype: str) -> NDArray[np.uint8]:
     """An image message as 8-bit BGR (H, W, 3) or grey (H, W); 16-bit infrared is scaled by 1/256."""
-    from rosbags.image import compressed_image_to_cvimage, message_to_cvimage
-
-    image = np.asarray(compressed_image_to_cvimage(msg) if msgtype.endswith("CompressedImage")
-                       else message_to_cvimage(msg))
+    image = image_from_message(msg, msgtype, error=DepthError)
     if image.dtype == np.uint16:
         image = (image // 256).astype(np.uint8)
     if image.ndim == 3 and image.shape[2] == 4:
@@ -42,8 +39,6 @@ def decode_image(msg: Any, msgtype: str) -> NDArray[np.uint8]:
 def decode_depth(msg: Any, msgtype: str, *, scale_m: float = DEFAULT_DEPTH_SCALE_M, name: str = "depth"
                  ) -> NDArray[np.float32]:
     """A depth image message (16UC1 counts of ``scale_m`` metres, or 32FC1 metres) as float32 metres, NaN no data."""
-    from rosbags.image import message_to_cvimage
-
     if msgtype.endswith("CompressedImage"):
         raise DepthError("compressed depth topics are not supported", field="--depth-topic",
                          hint="record the raw depth topic (16UC1)")
@@ -51,7 +46,8 @@ def decode_depth(msg: Any, msgtype: str, *, scale_m: float = DEFAULT_DEPTH_SCALE
     if encoding not in ("16UC1", "MONO16", "32FC1"):
         raise DepthError(f"depth topic has encoding {encoding or '?'}", path=name, field="--depth-topic",
                          hint="pass a 16UC1 (mm) or 32FC1 (m) depth topic")
-    return depth_from_array(np.asarray(message_to_cvimage(msg)), scale_m=scale_m, name=name)
+    image = image_from_message(msg, msgtype, error=DepthError, topic="--depth-topic")
+    return depth_from_array(image, scale_m=scale_m, name=name)
 
 
 def _check(reader: Any, bag: Path, topics: dict[str, str]) -> None:

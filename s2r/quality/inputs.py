@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import DepthError
+from s2r.imageio import decode_image_file
 
 __all__ = ["DEPTH_SUFFIXES", "IMAGE_SUFFIXES", "FramePaths", "list_files", "pair_files", "read_depth", "read_grey"]
 
@@ -71,9 +72,9 @@ def pair_files(left: Sequence[Path], other: Sequence[Path], *, kind: str) -> lis
 
 def read_grey(path: Path) -> NDArray[np.uint8]:
     """An image file as 8-bit grey (H, W); 16-bit images (infrared) are scaled by 1/256."""
-    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    image, reason = decode_image_file(path, cv2.IMREAD_UNCHANGED)
     if image is None:
-        raise DepthError("not a readable image", path=path, hint="pass PNG/JPEG images")
+        raise DepthError(reason, path=path, hint="pass PNG/JPEG images")
     if image.dtype == np.uint16:
         image = (np.asarray(image, np.uint16) // 256).astype(np.uint8)
     if image.dtype != np.uint8:
@@ -110,9 +111,9 @@ def read_depth(path: Path, *, scale_m: float = DEFAULT_DEPTH_SCALE_M) -> NDArray
         except (OSError, ValueError) as exc:
             raise DepthError(f"not a readable .npy array: {exc}", path=path, hint="save with numpy.save") from None
     else:
-        array = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        array, reason = decode_image_file(path, cv2.IMREAD_UNCHANGED)
         if array is None:
-            raise DepthError("not a readable depth image", path=path, hint="pass uint16 PNG depth images")
+            raise DepthError(f"not a readable depth image: {reason}", path=path, hint="pass uint16 PNG depth images")
         if array.dtype == np.uint8:
             raise DepthError("8-bit image: a depth image must be uint16 (1 mm units)", path=path,
                              hint="pass the raw 16-bit depth PNG, not a colourised view")

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import StereoPipeline
 from s2r.errors import DepthError
+from s2r.imageio import decode_image_file
 from s2r.profile import StereoProfile
 from s2r.quality.bags import bag_pairs, decode_depth, decode_image
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, FramePaths, read_depth, read_grey
@@ -37,9 +38,9 @@ def device_fb(profile: StereoProfile) -> float:
 
 
 def _colour(path: Path) -> NDArray[np.uint8]:
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    image, reason = decode_image_file(path, cv2.IMREAD_COLOR)
     if image is None:
-        raise DepthError("not a readable image", path=path, hint="pass PNG/JPEG images")
+        raise DepthError(reason, path=path, hint="pass PNG/JPEG images")
     return np.asarray(image, np.uint8)
 
 

@@ -70,14 +70,18 @@ def board_surface(tmp_dir: Path, board: BoardGeometry, layout: TargetLayout | No
     return mesh, write_png(tmp_dir / "board.png", texture)
 
 
+#: Most views one render call draws: calibration needs 10-50; a billion would render for days.
+MAX_VIEWS = 1000
+
+
 def _check_board(pattern: tuple[int, int], square_m: float, views: int) -> None:
     if len(pattern) != 2 or min(pattern) < 2:
         raise RenderError(f"pattern must be two counts of inner corners >= 2, got {pattern}", field="pattern",
                           hint="e.g. --pattern 9x6")
-    if not square_m > 0:
-        raise RenderError(f"square size must be positive, got {square_m}", field="square_m", hint="e.g. --square 0.025")
-    if views < 1:
-        raise RenderError(f"views must be at least 1, got {views}", field="views", hint="e.g. --views 20")
+    if not 0 < square_m <= 2.0:
+        raise RenderError(f"square size must be 0-2 m, got {square_m}", field="square_m", hint="e.g. --square 0.025")
+    if not 1 <= views <= MAX_VIEWS:
+        raise RenderError(f"views must be 1-{MAX_VIEWS}, got {views}", field="views", hint="e.g. --views 20")
 
 
 def _truth(profile: StereoProfile, board: BoardGeometry, names: list[str], poses: list[NDArray[np.float64]],

@@ -16,7 +16,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import RenderError
-from s2r.profile import StereoProfile
+from s2r.profile import Camera, StereoProfile
+from s2r.render.cubemap import lens_rays
 from s2r.render.distortion import undistort_pixels
 from s2r.render.textures import speckle_texture, write_png
 from s2r.render.world import Surface, box_faces, write_mesh
@@ -32,6 +33,8 @@ SPAN_RATIO = 1.5
 _TEXTURE_PX = 1024
 _MAX_SIDE_FACTOR = 20.0
 _MAX_INCIDENCE_DEG = 72.0
+#: Largest angle from the optical axis (degrees) a fisheye scene's planes are sized for.
+_FISHEYE_FIELD_DEG = 62.0
 
 
 def _field_rays(profile: StereoProfile) -> FloatArray:
@@ -43,8 +46,22 @@ def _field_rays(profile: StereoProfile) -> FloatArray:
         np.column_stack([t, np.full_like(t, -0.5)]), np.column_stack([t, np.full_like(t, h - 0.5)]),
         np.column_stack([np.full_like(s, -0.5), s]), np.column_stack([np.full_like(s, w - 0.5), s]),
     ])
+    if cam.distortion.model == "equidistant":
+        return _fisheye_field_rays(cam, border)
     norm = undistort_pixels(cam, border)
     return np.column_stack([norm, np.ones(len(norm))])
+
+
+def _fisheye_field_rays(cam: Camera, border: FloatArray) -> FloatArray:
+    """Border rays (z = 1) of a fisheye, with angles from the axis capped at ``_FISHEYE_FIELD_DEG``: scenes cover
+    what the rectified images (at most ~90 deg wide, see ``s2r.rectification``) see, not the whole circle."""
+    rays, ok = lens_rays(cam, border)
+    rays = rays[ok]
+    theta = np.arccos(np.clip(rays[:, 2], -1.0, 1.0))
+    capped = np.minimum(theta, math.radians(_FISHEYE_FIELD_DEG))
+    side = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-12)  # sin(theta) of unit rays
+    x, y = rays[:, 0] / side * np.tan(capped), rays[:, 1] / side * np.tan(capped)
+    return np.column_stack([x, y, np.ones(len(x))])
 
 
 def _plane_side_m(profile: StereoProfile, R: FloatArray, centre: FloatArray) -> float:

@@ -1,7 +1,7 @@
 """Ground-truth depth scenes rendered through a profile: images, depth and rectified disparity.
 
-Ground truth in the rectified left image is exact: each rectified pixel's ray is mapped into the wide
-pinhole render of the left camera with ``cv2.initUndistortRectifyMap(K_wide, None, R1, P1)`` (R1, P1 from
+Ground truth in the rectified left image is exact: each rectified pixel's ray ``R1^T P1^-1 (u, v, 1)`` is mapped
+into the wide pinhole render (or the cube map) of the left camera (R1, P1 from
 ``s2r.rectification.stereo_rectification(profile, alpha=0.0)``, exactly what the depth pipeline uses), the
 render's inverse depth is sampled bilinearly there (exact on planar facets) and converted to the rectified
 frame's z: ``Z_rect = Z_left * (R1[2] . (x, y, 1))``. Disparity is ``fx' B / Z_rect - doffs`` (doffs 0 with
@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import yaml
 from numpy.typing import NDArray
@@ -81,13 +80,12 @@ class _SceneJob:
 def rectified_inverse_depth(left: Capture, R1: NDArray[np.float64], P1: NDArray[np.float64],
                             size: tuple[int, int]) -> F32:
     """(H, W) inverse depth (1/m) along the rectified left axis at every rectified left pixel; NaN unknown."""
-    wide_K = left.prep.wide.K
-    maps = cv2.initUndistortRectifyMap(wide_K, None, R1, P1[:3, :3], size, cv2.CV_32FC1)
-    mapx, mapy = np.asarray(maps[0], dtype=np.float32), np.asarray(maps[1], dtype=np.float32)
-    x = (mapx.astype(np.float64) - wide_K[0, 2]) / wide_K[0, 0]
-    y = (mapy.astype(np.float64) - wide_K[1, 2]) / wide_K[1, 1]
+    u, v = np.meshgrid(np.arange(size[0], dtype=np.float64), np.arange(size[1], dtype=np.float64))
+    rays = np.linalg.inv(P1[:3, :3]) @ np.vstack([u.ravel(), v.ravel(), np.ones(u.size)])  # rectified frame
+    rays = R1.T @ rays  # left optical frame
+    x, y = (rays[0] / rays[2]).reshape(u.shape), (rays[1] / rays[2]).reshape(u.shape)
     factor = R1[2, 0] * x + R1[2, 1] * y + R1[2, 2]
-    inv_left = left.sample_inverse_depth((mapx, mapy))
+    inv_left = left.inverse_z_at(x, y)
     return np.asarray(inv_left / factor, dtype=np.float32)
 
 

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from s2r.errors import RenderError
 from s2r.profile import Camera
 from s2r.render.camera import PinholeView, depth_buffer_to_z, render_pinhole
+from s2r.render.cubemap import CubeMap, lens_rays, plan_cube_map
 from s2r.render.distortion import is_pinhole, normalised_rays, undistort_pixels
 
 __all__ = ["CameraSetup", "Capture", "capture", "prepared"]
@@ -63,11 +64,31 @@ class CameraSetup:
 
 @dataclass(frozen=True)
 class Prepared:
-    """Per-process precomputation of a setup: the wide pinhole and the maps into it."""
+    """Per-process precomputation of a setup: the wide pinhole (or the cube map) and the maps into it.
+
+    Attributes:
+        wide: the wide pinhole rendered for the image; with a cube map, its first face (clip planes).
+        map_hi: supersampled output pixel -> wide (or atlas) pixel; None: identity.
+        map_lo: output pixel centre -> wide (or atlas) pixel.
+        cube: the cube map of a lens too wide for one pinhole (module :mod:`s2r.render.cubemap`), else None.
+        factor_lo: cube map only, (H, W) float32 ``a . (x, y, 1)`` turning face inverse depth into camera 1/z.
+    """
 
     wide: PinholeView
-    map_hi: Map | None  # supersampled output pixel -> wide pixel (None: identity)
-    map_lo: Map  # output pixel centre -> wide pixel
+    map_hi: Map | None
+    map_lo: Map
+    cube: CubeMap | None = None
+    factor_lo: NDArray[np.float32] | None = None
+
+    def locate(self, x: FloatArray, y: FloatArray) -> tuple[Map, NDArray[np.float32] | None]:
+        """Wide (or atlas) pixel maps of normalised camera rays ``(x, y)`` (same shape, float64) and, with a cube
+        map, the factor turning the sampled face inverse depth into the camera's 1/z (None: 1)."""
+        if self.cube is None:
+            return _map_into(self.wide, x, y), None
+        rays = np.column_stack([x.ravel(), y.ravel(), np.ones(x.size)])
+        u, v, factor = self.cube.locate(rays)
+        return ((u.reshape(x.shape).astype(np.float32), v.reshape(x.shape).astype(np.float32)),
+                factor.reshape(x.shape).astype(np.float32))
 
 
 def _wide_view(setup: CameraSetup, cam_hi: Camera) -> PinholeView:
@@ -102,6 +123,35 @@ def _map_into(wide: PinholeView, x: FloatArray, y: FloatArray) -> Map:
     return (K[0, 0] * x + K[0, 2]).astype(np.float32), (K[1, 1] * y + K[1, 2]).astype(np.float32)
 
 
+def _grid(camera: Camera) -> FloatArray:
+    u, v = np.meshgrid(np.arange(camera.width_px, dtype=np.float64), np.arange(camera.height_px, dtype=np.float64))
+    return np.column_stack([u.ravel(), v.ravel()])
+
+
+def _cube_prepared(setup: CameraSetup, cam_hi: Camera) -> Prepared:
+    """The cube-map precomputation of a lens too wide for one pinhole (see :mod:`s2r.render.cubemap`)."""
+    cam = setup.camera
+    rays_hi, ok_hi = lens_rays(cam_hi, _grid(cam_hi))
+    rays_lo, ok_lo = lens_rays(cam, _grid(cam))
+    if not np.any(ok_lo):
+        raise RenderError("no pixel of the camera sees the scene through its lens model", field="distortion",
+                          hint="check the distortion coefficients and the focal length")
+    cube = plan_cube_map(cam_hi, np.concatenate([rays_hi[ok_hi], rays_lo[ok_lo]]), setup.T_cam_world,
+                         setup.near, setup.far)
+
+    def maps(camera: Camera, rays: FloatArray, ok: NDArray[np.bool_]) -> tuple[Map, NDArray[np.float32]]:
+        u, v, factor = cube.locate(rays)
+        u[~ok], v[~ok] = -1e4, -1e4  # outside the lens field: black, no depth
+        factor = np.where(ok, factor / np.where(ok, rays[:, 2], 1.0), 1.0)  # a . (x, y, 1) for unit rays d
+        shape = (camera.height_px, camera.width_px)
+        return ((u.reshape(shape).astype(np.float32), v.reshape(shape).astype(np.float32)),
+                factor.reshape(shape).astype(np.float32))
+
+    map_hi, _ = maps(cam_hi, rays_hi, ok_hi)
+    map_lo, factor_lo = maps(cam, rays_lo, ok_lo)
+    return Prepared(cube.faces[0], map_hi, map_lo, cube, factor_lo)
+
+
 _PREPARED: dict[str, Prepared] = {}
 
 
@@ -112,13 +162,19 @@ def prepared(setup: CameraSetup) -> Prepared:
         cam = setup.camera
         s = setup.supersample
         cam_hi = cam.scaled(cam.width_px * s, cam.height_px * s) if s > 1 else cam
-        wide = _wide_view(setup, cam_hi)
-        map_hi = None if is_pinhole(cam_hi) else _map_into(wide, *normalised_rays(cam_hi, cam_hi.width_px,
-                                                                                  cam_hi.height_px))
-        map_lo = _map_into(wide, *normalised_rays(cam, cam.width_px, cam.height_px))
+        try:
+            wide = _wide_view(setup, cam_hi)
+        except RenderError:
+            if cam.distortion.model != "equidistant":
+                raise
+            prep = _cube_prepared(setup, cam_hi)  # a fisheye wider than one pinhole covers: cube map
+        else:
+            map_hi = None if is_pinhole(cam_hi) else _map_into(wide, *normalised_rays(cam_hi, cam_hi.width_px,
+                                                                                      cam_hi.height_px))
+            prep = Prepared(wide, map_hi, _map_into(wide, *normalised_rays(cam, cam.width_px, cam.height_px)))
         if len(_PREPARED) > 16:
             _PREPARED.clear()
-        _PREPARED[key] = Prepared(wide, map_hi, map_lo)
+        _PREPARED[key] = prep
     return _PREPARED[key]
 
 
@@ -157,9 +213,19 @@ class Capture:
         inv[(bad > 0) | ~(inv > 0)] = np.nan
         return inv
 
+    def inverse_z_at(self, x: FloatArray, y: FloatArray) -> NDArray[np.float32]:
+        """Inverse depth 1/z (1/m, z along this camera's optical axis) of the rays with normalised coordinates
+        ``(x, y)`` (float64 arrays of one shape); NaN near depth edges, background or outside the render."""
+        map_xy, factor = self.prep.locate(x, y)
+        inv = self.sample_inverse_depth(map_xy)
+        return inv if factor is None else np.asarray(inv * factor, dtype=np.float32)
+
     def depth_m(self) -> NDArray[np.float32]:
         """(H, W) float32 z in metres along the camera's optical axis at each output pixel; NaN unknown."""
-        return np.asarray(1.0 / self.sample_inverse_depth(self.prep.map_lo), dtype=np.float32)
+        inv = self.sample_inverse_depth(self.prep.map_lo)
+        if self.prep.factor_lo is not None:
+            inv = inv * self.prep.factor_lo
+        return np.asarray(1.0 / inv, dtype=np.float32)
 
 
 def _edges(inv_z: NDArray[np.float32]) -> NDArray[np.uint8]:
@@ -170,14 +236,31 @@ def _edges(inv_z: NDArray[np.float32]) -> NDArray[np.uint8]:
     return np.asarray(cv2.dilate(bad.astype(np.uint8), kernel), dtype=np.uint8)
 
 
+def _render_atlas(cube: CubeMap) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """Render every face of ``cube`` into one atlas: RGB (black between faces) and depth buffer (1 = far)."""
+    width, height = cube.atlas_size
+    rgb = np.zeros((height, width, 3), np.uint8)
+    depth = np.ones((height, width), np.float32)
+    for view, column in zip(cube.faces, cube.offsets, strict=True):
+        face_rgb, face_depth = render_pinhole(view)
+        rgb[: view.height, column:column + view.width] = face_rgb
+        depth[: view.height, column:column + view.width] = face_depth
+    return rgb, depth
+
+
 def capture(setup: CameraSetup) -> Capture:
     """Render the current world through ``setup`` (supersampled, distorted); see the module docstring."""
     prep = prepared(setup)
-    rgb_w, depth_w = render_pinhole(prep.wide)
+    if prep.cube is None:
+        rgb_w, depth_w = render_pinhole(prep.wide)
+        border = cv2.BORDER_REPLICATE
+    else:
+        rgb_w, depth_w = _render_atlas(prep.cube)
+        border = cv2.BORDER_CONSTANT  # black outside the fisheye's field
     img = rgb_w
     if prep.map_hi is not None:
-        img = np.asarray(cv2.remap(rgb_w, prep.map_hi[0], prep.map_hi[1], cv2.INTER_LINEAR,
-                                   borderMode=cv2.BORDER_REPLICATE), dtype=np.uint8)
+        img = np.asarray(cv2.remap(rgb_w, prep.map_hi[0], prep.map_hi[1], cv2.INTER_LINEAR, borderMode=border,
+                                   borderValue=(0, 0, 0)), dtype=np.uint8)
     cam = setup.camera
     if setup.supersample > 1:
         img = np.asarray(cv2.resize(img, (cam.width_px, cam.height_px), interpolation=cv2.INTER_AREA),

@@ -18,6 +18,26 @@ applies it to focal-normalised ``x = (u - cx) / fx``, ``y = (v - cy) / fy``. Wit
 5-term OpenCV model equals Gazebo's, so both directions here are linear least-squares fits of the
 pixel displacement over the image (both models are linear in their coefficients) and report the
 residual in pixels: that residual is the documented limit of the conversion.
+
+Which units each simulator uses (read from their source, 2026-11):
+
+- Gazebo classic 11 (gazebo/rendering/Distortion.cc, ``Distortion::Distort``): the image-size-normalised model
+  above by default; ``<ignition:legacy_mode>false</ignition:legacy_mode>`` inside ``<distortion>`` (PR 3009)
+  multiplies texture offsets by ``W / f`` first. Both normalise x and y by the same length on a texture that is
+  stretched to W x H, so neither is OpenCV's model on a non-square image: they differ only in the coefficients'
+  units. The gazebo_ros camera plugins (gazebo_ros_camera_utils.cpp, ``GazeboRosCameraUtils::Init``) crop
+  barrel-distorted images (k1 < 0) to hide the black border unless ``<borderCrop>false</borderCrop>``; the crop
+  magnifies the image and changes the focal length.
+- gz-sim (gz-rendering ogre/src/OgreDistortionPass.cc, ``OgreDistortionPass::Distort``): always the scaled form,
+  ``n' = (t - center) * S / F`` with ``S = max(W, H)`` and ``F = S / (2 tan(fov / 2))``, ``fov`` =
+  ``FOVy * aspect`` (W >= H) or ``FOVy`` (H > W), where Ogre's ``FOVy = 2 atan(tan(hfov / 2) / aspect)``
+  (ogre/src/OgreCamera.cc ``SetHFOV``). So gz-sim coefficients are the image-normalised ones divided by
+  ``s^2, s^4, s^6`` (k1, k2, k3) and ``s`` (p1, p2) with ``s = 2 tan(fov / 2)``
+  (:func:`gz_sim_distortion_scale`). Only the ogre (1.x) engine has a distortion pass; gz-sensors' default ogre2
+  renders undistorted (``ImageBrownDistortionModel::SetCamera``: "not supported"); the pass always crops k1 < 0.
+- Both honour ``<lens><intrinsics>`` (classic ``Camera::LoadCameraIntrinsics``; gz-sensors
+  ``CameraSensor::UpdateLensIntrinsicsAndProjection``) with the principal point in continuous pixel coordinates
+  (the image's left edge at 0): OpenCV's 0-based ``cx`` + 0.5.
 """
 
 from __future__ import annotations
@@ -34,18 +54,25 @@ from s2r.sources.description import FloatArray, LensIntrinsics
 __all__ = [
     "CENTRE_OFFSET_PX",
     "CONVENTIONS",
+    "LENS_OFFSET_PX",
     "DistortionFit",
     "Intrinsics",
     "check_convention",
+    "classic_distortion_scale",
+    "crop_magnification",
     "focal_from_hfov",
     "gazebo_to_opencv_distortion",
+    "gz_sim_distortion_scale",
     "hfov_from_focal",
     "intrinsics_for",
     "opencv_to_gazebo_distortion",
+    "scale_distortion",
     "texture_center",
 ]
 
 CONVENTIONS = ("gazebo-classic", "gz-sim", "exact")
+#: ``<lens><intrinsics>`` cx, cy minus OpenCV's 0-based principal point, pixels (continuous coordinates).
+LENS_OFFSET_PX = 0.5
 # CENTRE_OFFSET_PX (published principal point minus the exact centre) lives in s2r.profile, re-exported here.
 
 
@@ -87,13 +114,40 @@ def hfov_from_focal(width_px: int, fx_px: float) -> float:
 
 def intrinsics_for(width_px: int, height_px: int, hfov_rad: float, convention: str,
                    lens: LensIntrinsics | None = None) -> Intrinsics:
-    """Intrinsics a camera of this size and FOV has in ``convention`` (``<lens><intrinsics>`` used by gz-sim)."""
+    """Intrinsics a camera of this size and FOV renders with, its principal point expressed in ``convention``.
+
+    ``<lens><intrinsics>`` wins when given (both simulators render with it; its cx, cy are OpenCV's + 0.5)."""
     check_convention(convention)
-    if convention == "gz-sim" and lens is not None:
-        return Intrinsics(lens.fx, lens.fy, lens.cx, lens.cy, lens.s)
-    f = focal_from_hfov(width_px, hfov_rad)
     offset = CENTRE_OFFSET_PX[convention]
+    if lens is not None:
+        shift = offset - LENS_OFFSET_PX
+        return Intrinsics(lens.fx, lens.fy, lens.cx + shift, lens.cy + shift, lens.s)
+    f = focal_from_hfov(width_px, hfov_rad)
     return Intrinsics(f, f, (width_px - 1) / 2.0 + offset, (height_px - 1) / 2.0 + offset)
+
+
+def gz_sim_distortion_scale(width_px: int, height_px: int, hfov_rad: float) -> float:
+    """``s = 2 tan(fov / 2)``: gz-rendering's distortion units are the image-normalised ones scaled by ``s``
+    (k1 by ``s^2``, k2 ``s^4``, k3 ``s^6``, p1 p2 ``s``): ``k_image = k_gz * s^2``. ``fov`` as
+    OgreDistortionPass computes it from Ogre's vertical FOV (see the module docstring)."""
+    aspect = width_px / height_px
+    fovy = 2.0 * math.atan(math.tan(hfov_rad / 2.0) / aspect)
+    fov = fovy * aspect if width_px >= height_px else fovy
+    return 2.0 * math.tan(fov / 2.0)
+
+
+def classic_distortion_scale(width_px: int, height_px: int, hfov_rad: float) -> float:
+    """Gazebo classic with ``<ignition:legacy_mode>false``: ``s = 2 tan(fov / 2)`` with its own ``fov`` (HFOV,
+    or the VFOV ``2 atan(tan(hfov / 2) H / W)`` when H > W; Distortion::SetCamera): ``W / f`` for W >= H."""
+    fov = hfov_rad if width_px >= height_px else 2.0 * math.atan(math.tan(hfov_rad / 2.0) * height_px / width_px)
+    return 2.0 * math.tan(fov / 2.0)
+
+
+def scale_distortion(coefficients: tuple[float, ...], s: float) -> tuple[float, float, float, float, float]:
+    """Gazebo ``(k1, k2, k3, p1, p2)`` in image-normalised units -> units scaled by ``s``
+    (divide by ``s^2, s^4, s^6, s, s``); pass ``1 / s`` for the way back."""
+    k1, k2, k3, p1, p2 = coefficients
+    return (k1 / s**2, k2 / s**4, k3 / s**6, p1 / s, p2 / s)
 
 
 def _grid(width: int, height: int, steps: int = 24) -> tuple[FloatArray, FloatArray]:
@@ -177,3 +231,25 @@ def opencv_to_gazebo_distortion(coefficients: tuple[float, ...], *, width: int, 
     solved, rms, worst = _fit_used(a_cv, a_gz, np.array([k1, k2, k3, p1, p2]))
     c = [float(v) for v in solved]
     return DistortionFit((c[0], c[1], c[2], c[3], c[4]), rms, worst)
+
+
+def crop_magnification(coefficients: tuple[float, float, float, float, float],
+                       center: tuple[float, float]) -> tuple[float, float]:
+    """How much Gazebo's border crop magnifies a barrel-distorted image (x, y), >= 1; (1, 1) when k1 >= 0.
+
+    ``coefficients``: Gazebo ``(k1, k2, k3, p1, p2)`` in image-normalised units; ``center`` in texture
+    coordinates. The crop scales the output by the span of the distorted image corners (0, 0) and (1, 1)
+    (``Distortion::CalculateAndApplyDistortionScale``), so focal lengths grow by this factor."""
+    if coefficients[0] >= 0:
+        return 1.0, 1.0
+
+    def distort(u: float, v: float) -> tuple[float, float]:
+        k1, k2, k3, p1, p2 = coefficients
+        x, y = u - center[0], v - center[1]
+        r2 = x * x + y * y
+        radial = 1.0 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+        return (x * radial + p2 * (r2 + 2 * x * x) + 2 * p1 * x * y,
+                y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y)
+
+    (ax, ay), (bx, by) = distort(0.0, 0.0), distort(1.0, 1.0)
+    return 1.0 / (bx - ax), 1.0 / (by - ay)

@@ -25,7 +25,8 @@ OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
 
 @dataclass(frozen=True)
 class LensIntrinsics:
-    """``<lens><intrinsics>`` (gz-sim): focal lengths, principal point and skew in pixels."""
+    """``<lens><intrinsics>`` (gz-sim and Gazebo classic): focal lengths, principal point (OpenCV's + 0.5) and skew,
+    pixels."""
 
     fx: float
     fy: float
@@ -47,6 +48,8 @@ class GazeboDistortion:
     p2: float = 0.0
     center: tuple[float, float] = (0.5, 0.5)
     line: int | None = None
+    #: Gazebo classic's ``<ignition:legacy_mode>`` (default true): false = coefficients in the W/f-scaled units.
+    legacy_mode: bool = True
 
     @property
     def is_zero(self) -> bool:
@@ -76,6 +79,8 @@ class PluginSpec:
     frame_name: str | None = None
     camera_name: str | None = None
     line: int | None = None
+    #: ``<borderCrop>`` (gazebo_ros, default true): crop a barrel-distorted image (k1 < 0), magnifying it.
+    border_crop: bool = True
 
 
 @dataclass(frozen=True, eq=False)

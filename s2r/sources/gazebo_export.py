@@ -6,13 +6,15 @@ Formats:
   sensors and gazebo_ros camera plugins (``hackBaseline`` on the right one) - Gazebo classic.
 - ``sdf``: one ``multicamera`` sensor with cameras ``left`` and ``right`` (the right one's ``<pose>``) and
   libgazebo_ros_multicamera.so with ``hackBaseline`` - Gazebo classic.
-- ``gz-sim``: two ``camera`` sensors with ``<lens><intrinsics>`` (fx, fy, cx, cy, s) - new Gazebo.
+- ``gz-sim``: two ``camera`` sensors - new Gazebo.
 
-``horizontal_fov = 2 atan(W / (2 fx))`` is the exact inverse of every convention's focal length. Distortion
-is converted to Gazebo's image-normalised units (:mod:`s2r.sources.conventions`) about the principal point
-the simulator renders (gz-sim: the profile's, written in ``<lens><intrinsics>`` and ``<distortion><center>``;
-classic: the image centre). What a format cannot express comes back as warnings that state the error left,
-in pixels.
+Every camera carries ``<lens><intrinsics>`` (fx, fy, cx, cy, s; both simulators render with it) and
+``horizontal_fov = 2 atan(W / (2 fx))``, the exact inverse of every convention's focal length. Distortion is
+converted to Gazebo's image-normalised model (:mod:`s2r.sources.conventions`) about the profile's principal point
+(``<distortion><center>``), written in Gazebo classic's default units and, for gz-sim, in gz-rendering's scaled
+ones. The gazebo_ros plugins get ``borderCrop`` false (their default crop magnifies a barrel-distorted image) and
+camera_info K and D from the profile. What a format cannot express, and what gz-sim does that no SDF element
+controls (no distortion under ogre2, the crop), comes back as warnings that state the error left, in pixels.
 
 Pasting into a ROS robot: the URDF snippet defines the ``*_optical_frame`` links its plugins publish (joint
 rpy -pi/2 0 -pi/2 from each camera link) and, given ``parent_link``, the joint that mounts the rig on it.
@@ -31,7 +33,16 @@ import numpy as np
 from s2r.errors import SourceError
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
 from s2r.profile import Camera, StereoProfile
-from s2r.sources.conventions import CENTRE_OFFSET_PX, hfov_from_focal, opencv_to_gazebo_distortion, texture_center
+from s2r.sources.conventions import (
+    CENTRE_OFFSET_PX,
+    LENS_OFFSET_PX,
+    crop_magnification,
+    gz_sim_distortion_scale,
+    hfov_from_focal,
+    opencv_to_gazebo_distortion,
+    scale_distortion,
+    texture_center,
+)
 from s2r.sources.description import FloatArray
 
 __all__ = ["EXPORT_FORMATS", "OPTICAL_RPY", "export_gazebo", "is_realsense"]
@@ -80,21 +91,9 @@ class _Exporter:
         return f"{p.name}/{side}", "image_raw", f"{p.name}_{side}_optical_frame"
 
     def check_camera(self, side: str, cam: Camera) -> None:
-        w, h = cam.width_px, cam.height_px
-        if self.fmt != "gz-sim":
-            if abs(cam.fx_px - cam.fy_px) > 1e-9 * cam.fx_px:
-                err = (h / 2.0) * abs(cam.fx_px / cam.fy_px - 1.0)
-                self.warnings.append(f"{side}: fx {cam.fx_px:.3f} != fy {cam.fy_px:.3f} cannot be expressed in Gazebo "
-                                     f"classic (fy = fx is used): {err:.2f} px error at the top and bottom edges")
-            dx = cam.cx_px - self.offset - (w - 1) / 2.0
-            dy = cam.cy_px - self.offset - (h - 1) / 2.0
-            if math.hypot(dx, dy) > 0.01:
-                self.warnings.append(f"{side}: off-centre principal point ({cam.cx_px:.2f}, {cam.cy_px:.2f}) cannot be "
-                                     f"expressed in Gazebo classic (it renders centred): {math.hypot(dx, dy):.2f} px "
-                                     f"error ({dx:+.2f}, {dy:+.2f})")
-            if cam.skew:
-                self.warnings.append(f"{side}: skew {cam.skew:g} dropped: up to {abs(cam.skew) * h / 2 / cam.fy_px:.2f}"
-                                     " px error at the image edges")
+        if self.fmt != "gz-sim" and abs(cam.fx_px - cam.fy_px) > 1e-9 * cam.fx_px:
+            self.warnings.append(f"{side}: fx {cam.fx_px:.3f} != fy {cam.fy_px:.3f}: the image renders with both "
+                                 "(<lens><intrinsics>) but gazebo_ros' camera_info publishes fx for both")
 
     def camera(self, parent: ET.Element, side: str, cam: Camera, *, name: str | None = None) -> ET.Element:
         self.check_camera(side, cam)
@@ -114,12 +113,12 @@ class _Exporter:
             _sub(noise, "mean", 0.0)
             _sub(noise, "stddev", self.noise)
         self.distortion(node, side, cam)
-        if self.fmt == "gz-sim":
-            intr = _sub(_sub(node, "lens"), "intrinsics")
-            shift = CENTRE_OFFSET_PX["gz-sim"] - self.offset
-            for tag, value in (("fx", cam.fx_px), ("fy", cam.fy_px), ("cx", cam.cx_px + shift),
-                               ("cy", cam.cy_px + shift), ("s", cam.skew)):
-                _sub(intr, tag, value)
+        # Both simulators render with <lens><intrinsics> (cx, cy in continuous pixels: OpenCV's + 0.5)
+        intr = _sub(_sub(node, "lens"), "intrinsics")
+        shift = LENS_OFFSET_PX - self.offset
+        for tag, value in (("fx", cam.fx_px), ("fy", cam.fy_px), ("cx", cam.cx_px + shift),
+                           ("cy", cam.cy_px + shift), ("s", cam.skew)):
+            _sub(intr, tag, value)
         return node
 
     def distortion(self, node: ET.Element, side: str, cam: Camera) -> None:
@@ -128,23 +127,37 @@ class _Exporter:
         if cam.distortion.model != "plumb_bob":
             self.warnings.append(f"{side}: {cam.distortion.model} distortion has no Gazebo equivalent and was dropped")
             return
-        # Distortion about the principal point the simulator renders (exact 0-based pixels): the profile's in
-        # gz-sim (<lens><intrinsics> carries it), the image centre in Gazebo classic (which renders centred).
-        principal = ((cam.cx_px - self.offset, cam.cy_px - self.offset) if self.fmt == "gz-sim"
-                     else ((cam.width_px - 1) / 2.0, (cam.height_px - 1) / 2.0))
+        # Distortion about the principal point the simulator renders (exact 0-based pixels; <lens><intrinsics>)
+        principal = (cam.cx_px - self.offset, cam.cy_px - self.offset)
         fit = opencv_to_gazebo_distortion(cam.distortion.coefficients, width=cam.width_px, height=cam.height_px,
                                           fx=cam.fx_px, fy=cam.fy_px, principal=principal)
         if fit.max_px > 0.01:
             self.warnings.append(f"{side}: plumb_bob distortion converted to Gazebo's image-normalised model with "
                                  f"{fit.rms_px:.3f} px RMS, {fit.max_px:.3f} px worst error (non-square image)")
-        if fit.coefficients[0] >= 0:
-            self.warnings.append(f"{side}: Gazebo classic only renders barrel distortion (k1 < 0); k1 = "
-                                 f"{fit.coefficients[0]:.6g} may be ignored by the simulator")
-        dist = _sub(node, "distortion")
-        for tag, value in zip(("k1", "k2", "k3", "p1", "p2"), fit.coefficients, strict=True):
-            _sub(dist, tag, value)
+        coeffs = fit.coefficients
         center = texture_center(cam.width_px, cam.height_px, *principal)
+        if self.fmt == "gz-sim":
+            self.gz_sim_notes(side, cam, coeffs, center)
+            coeffs = scale_distortion(coeffs, gz_sim_distortion_scale(cam.width_px, cam.height_px,
+                                                                      hfov_from_focal(cam.width_px, cam.fx_px)))
+        elif coeffs[0] >= 0:
+            self.warnings.append(f"{side}: Gazebo classic only renders barrel distortion (k1 < 0); k1 = "
+                                 f"{coeffs[0]:.6g} may be ignored by the simulator")
+        dist = _sub(node, "distortion")
+        for tag, value in zip(("k1", "k2", "k3", "p1", "p2"), coeffs, strict=True):
+            _sub(dist, tag, value)
         _sub(dist, "center", f"{_num(center[0])} {_num(center[1])}")
+
+
+    def gz_sim_notes(self, side: str, cam: Camera, coeffs: tuple[float, ...], center: tuple[float, float]) -> None:
+        """What gz-sim does to a lens that no SDF element controls (gz-rendering / gz-sensors source)."""
+        self.warnings.append(f"{side}: gz-sim renders <distortion> only with the ogre render engine (ogre2, the "
+                             "default, has no distortion pass): run the world with --render-engine ogre")
+        mx, my = crop_magnification((coeffs[0], coeffs[1], coeffs[2], coeffs[3], coeffs[4]), center)
+        if max(mx, my) > 1.0005:
+            self.warnings.append(f"{side}: gz-sim crops a barrel-distorted image (k1 < 0) to hide its black border, "
+                                 f"magnifying it {mx:.4f} x {my:.4f}: it renders fx {cam.fx_px * mx:.2f}, not "
+                                 f"{cam.fx_px:.2f} (no SDF switch; Gazebo classic's is borderCrop, set false here)")
 
 
 def _pose_text(T: FloatArray) -> str:
@@ -157,8 +170,20 @@ def _optical_pose(profile: StereoProfile) -> FloatArray:
     return T_LINK_OPTICAL @ T_opt @ invert_transform(T_LINK_OPTICAL)
 
 
-def _plugin(parent: ET.Element, filename: str, name: str, frame: str, hack: float | None, image_topic: str) -> None:
+def _plugin(parent: ET.Element, filename: str, name: str, frame: str, hack: float | None, image_topic: str,
+            cam: Camera | None = None, offset: float = 0.0) -> None:
+    """gazebo_ros camera plugin; ``cam`` (one camera per plugin) also sets its camera_info K and D (OpenCV's
+    0-based pixels). ``borderCrop`` false: the crop would magnify a barrel-distorted image."""
     plugin = _sub(parent, "plugin", name=f"{name.replace('/', '_')}_controller", filename=filename)
+    _sub(plugin, "borderCrop", "false")
+    if cam is not None:
+        _sub(plugin, "focalLength", cam.fx_px)
+        _sub(plugin, "Cx", cam.cx_px - offset)
+        _sub(plugin, "Cy", cam.cy_px - offset)
+        if cam.distortion.model == "plumb_bob":
+            k1, k2, p1, p2, k3 = (tuple(cam.distortion.coefficients) + (0.0,) * 5)[:5]
+            for tag, value in (("K1", k1), ("K2", k2), ("K3", k3), ("T1", p1), ("T2", p2)):
+                _sub(plugin, f"distortion{tag}", value)
     _sub(plugin, "alwaysOn", "true")
     _sub(plugin, "updateRate", 0.0)
     _sub(plugin, "cameraName", name)
@@ -204,7 +229,8 @@ def _urdf(ex: _Exporter, parent_link: str | None) -> ET.Element:
         sensor = _sensor(gazebo, "camera", f"{side}_camera", rate)
         ex.camera(sensor, side, cam, name=side)
         name, topic, frame = ex.topic(side)
-        _plugin(sensor, "libgazebo_ros_camera.so", name, frame, p.baseline_m if side == "right" else None, topic)
+        _plugin(sensor, "libgazebo_ros_camera.so", name, frame, p.baseline_m if side == "right" else None, topic,
+                cam, ex.offset)
     return robot
 
 

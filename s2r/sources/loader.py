@@ -116,6 +116,15 @@ def select_pair(description: Description, *, left: str | None = None,
     """
     cameras = description.cameras
     if not cameras:
+        macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)[\"']", description.source_text or "")
+        if macros and "<sensor" in (description.source_text or ""):  # e.g. PR2's *.gazebo.xacro sensor macros
+            raise SourceError(f"no camera sensor found: the file only defines xacro macros ({', '.join(macros)}) "
+                              "that nothing calls", path=description.path, field="<xacro:macro>",
+                              hint="pass the robot description that calls them (its top-level .urdf.xacro)")
+        if "<sensor:camera" in (description.expanded_text or description.source_text or ""):
+            raise SourceError("no camera sensor found: <sensor:camera> is the Gazebo 0.x (pre-SDF, ROS diamondback) "
+                              "format, which no current Gazebo reads", path=description.path, field="<sensor:camera>",
+                              hint="describe the cameras as SDF <sensor type='camera'> (Gazebo classic or gz-sim)")
         raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)
     if left is not None and right is not None:
         pair = (_pick(description, left, "--left"), _pick(description, right, "--right"))

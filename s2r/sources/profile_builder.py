@@ -28,8 +28,12 @@ from s2r.sources.conventions import (
     CENTRE_OFFSET_PX,
     Intrinsics,
     check_convention,
+    classic_distortion_scale,
+    crop_magnification,
     gazebo_to_opencv_distortion,
+    gz_sim_distortion_scale,
     intrinsics_for,
+    scale_distortion,
 )
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
 from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
@@ -66,13 +70,31 @@ def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
     if d is None or d.is_zero:
         return Distortion()
     offset = CENTRE_OFFSET_PX[convention]
-    fit = gazebo_to_opencv_distortion(d.k1, d.k2, d.k3, d.p1, d.p2, width=spec.width, height=spec.height,
+    coeffs: tuple[float, ...] = (d.k1, d.k2, d.k3, d.p1, d.p2)
+    if convention == "gz-sim":  # gz-rendering's units: image-normalised ones scaled by 2 tan(fov / 2)
+        coeffs = scale_distortion(coeffs, 1.0 / gz_sim_distortion_scale(spec.width, spec.height, spec.hfov_rad))
+    elif not d.legacy_mode:  # Gazebo classic's <ignition:legacy_mode>false</ignition:legacy_mode> (PR 3009)
+        coeffs = scale_distortion(coeffs, 1.0 / classic_distortion_scale(spec.width, spec.height, spec.hfov_rad))
+    _warn_crop(spec, coeffs, d.center, convention)
+    fit = gazebo_to_opencv_distortion(*coeffs, width=spec.width, height=spec.height,
                                       fx=k.fx, fy=k.fy, center=d.center, principal=(k.cx - offset, k.cy - offset))
     if fit.max_px > 0.05:
         logger.warning("camera %r: Gazebo's image-normalised <distortion> has no exact OpenCV equivalent at %dx%d; "
                        "the fitted plumb_bob model differs by %.3f px RMS, %.3f px at worst",
                        spec.name, spec.width, spec.height, fit.rms_px, fit.max_px)
     return Distortion(model="plumb_bob", coefficients=fit.coefficients)
+
+
+def _warn_crop(spec: CameraSpec, coeffs: tuple[float, ...], center: tuple[float, float], convention: str) -> None:
+    """Gazebo crops a barrel-distorted image (k1 < 0) to hide its black border: say how much that magnifies it."""
+    if convention == "gazebo-classic" and spec.plugin is not None and not spec.plugin.border_crop:
+        return
+    mx, my = crop_magnification((coeffs[0], coeffs[1], coeffs[2], coeffs[3], coeffs[4]), center)
+    if max(mx, my) > 1.0005:
+        fix = ("set <borderCrop>false</borderCrop> in its gazebo_ros camera plugin" if convention == "gazebo-classic"
+               else "gz-sim has no switch for it")
+        logger.warning("camera %r: Gazebo crops its barrel-distorted image (k1 < 0), magnifying it %.4f x %.4f: the "
+                       "rendered focal lengths are that much larger than these (%s)", spec.name, mx, my, fix)
 
 
 def renders_as_link(spec: CameraSpec, *, tol_rad: float = 1e-3) -> bool:
@@ -84,9 +106,6 @@ def renders_as_link(spec: CameraSpec, *, tol_rad: float = 1e-3) -> bool:
 
 
 def _camera(spec: CameraSpec, convention: str) -> Camera:
-    if spec.lens is not None and convention != "gz-sim":
-        logger.warning("camera %r: <lens><intrinsics> is only honoured by gz-sim; the %s convention uses "
-                       "horizontal_fov", spec.name, convention)
     k = intrinsics_for(spec.width, spec.height, spec.hfov_rad, convention, spec.lens)
     frame = spec.plugin.frame_name if spec.plugin and spec.plugin.frame_name else ""
     if not frame.endswith(OPTICAL_SUFFIXES):

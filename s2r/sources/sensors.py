@@ -114,7 +114,9 @@ def _distortion(doc: XmlDoc, camera: ET.Element) -> GazeboDistortion | None:
     k = {name: read_float(doc, node.find(name), 0.0) or 0.0 for name in ("k1", "k2", "k3", "p1", "p2")}
     center_node = node.find("center")
     center = (0.5, 0.5) if center_node is None else tuple(_floats(doc, center_node, center_node.text, 2))
-    return GazeboDistortion(center=(center[0], center[1]), line=doc.line(node), **k)
+    mode = next((c for c in node if c.tag.rsplit(":", 1)[-1].rsplit("}", 1)[-1] == "legacy_mode"), None)
+    legacy = mode is None or (mode.text or "").strip().lower() not in ("false", "0")
+    return GazeboDistortion(center=(center[0], center[1]), line=doc.line(node), legacy_mode=legacy, **k)
 
 
 def _noise(doc: XmlDoc, camera: ET.Element) -> NoiseSpec | None:
@@ -136,7 +138,9 @@ def _plugin(doc: XmlDoc, sensor: ET.Element) -> PluginSpec | None:
 
     hack, focal = first("hackBaseline", "hack_baseline"), first("focalLength", "focal_length")
     frame, name = first("frameName", "frame_name"), first("cameraName", "camera_name")
+    crop = first("borderCrop", "border_crop")
     return PluginSpec(
+        border_crop=crop is None or (crop.text or "").strip().lower() not in ("false", "0"),
         filename=node.get("filename", ""), line=doc.line(node),
         hack_baseline=read_float(doc, hack), hack_baseline_line=doc.line(hack),
         hack_baseline_tag="" if hack is None else hack.tag,

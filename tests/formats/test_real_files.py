@@ -152,7 +152,8 @@ def test_multisense_r1_p1_r2_p2_only(tmp_path: Path) -> None:
                     f"P2: {mat.format(r=3, c=4, d='580, 0, 512, -121.8, 0, 580, 272, 0, 0, 0, 1, 0')}")
     p = load_any([intr, extr])
     assert p.baseline_m == pytest.approx(121.8 / 580, abs=1e-12)  # 0.21 m, a MultiSense S21's baseline
-    assert p.left.distortion.model == "rational_polynomial"
+    assert p.left.distortion.model == "plumb_bob"  # 8 coefficients with k4 = k5 = k6 = 0: the 5-term model
+    assert p.left.distortion.coefficients == (-0.3, 0.1, 0.0, 0.0, 0.0)
 
 
 def test_ros_pair_with_six_decimal_and_zero_rotations(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:

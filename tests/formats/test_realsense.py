@@ -95,3 +95,15 @@ def test_damaged_blocks_of_other_streams_are_ignored(tmp_path: Path) -> None:
     assert load_realsense(damaged).left.fx_px == pytest.approx(424.691284179688)
     with pytest.raises(FormatError, match=r'"Color" 640x480: Fx: expected numbers, got \'broken\''):
         parse_realsense(damaged)
+
+
+def test_t265_fisheye_streams_are_the_pair() -> None:
+    """A T265 dump has no infrared streams: "Fisheye 1" / "Fisheye 2" (Kannala Brandt4 -> equidistant, k1..k4)
+    with realsense2_camera's fisheye frames; baseline |(-0.0640615, 0.000225, -0.000296)| = 0.0640626 m."""
+    from s2r.formats.detect import load_any
+
+    p = load_any(Path(__file__).parent / "data" / "rs_enumerate_devices_t265_format.txt")
+    assert p.image_size == (848, 800) and p.left.fx_px == 286.149505615234
+    assert p.left.distortion.model == "equidistant" and len(p.left.distortion.coefficients) == 4
+    assert (p.left.frame_id, p.right.frame_id) == ("camera_fisheye1_optical_frame", "camera_fisheye2_optical_frame")
+    assert p.baseline_m == pytest.approx(0.0640626, abs=1e-7)

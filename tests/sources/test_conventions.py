@@ -10,11 +10,14 @@ import pytest
 
 from s2r.errors import SourceError
 from s2r.sources.conventions import (
+    crop_magnification,
     focal_from_hfov,
     gazebo_to_opencv_distortion,
+    gz_sim_distortion_scale,
     hfov_from_focal,
     intrinsics_for,
     opencv_to_gazebo_distortion,
+    scale_distortion,
 )
 from s2r.sources.description import LensIntrinsics
 
@@ -47,10 +50,58 @@ def test_principal_point_per_convention(convention: str, cx: float, cy: float) -
     assert (k.cx, k.cy) == (cx, cy)
 
 
-def test_gz_sim_lens_intrinsics_override_and_classic_ignores_them() -> None:
+def test_lens_intrinsics_override_horizontal_fov_in_both_simulators() -> None:
+    """gazebo-classic Camera::LoadCameraIntrinsics and gz-sensors both render with <lens><intrinsics>; its cx, cy
+    are continuous pixels (OpenCV's + 0.5): 318.0 -> 317.5 exact, 318.0 gz-sim, 318.5 classic (+1 convention)."""
     lens = LensIntrinsics(fx=500.0, fy=501.0, cx=318.0, cy=242.0, s=0.5)
     assert tuple(intrinsics_for(640, 480, 1.047, "gz-sim", lens)) == (500.0, 501.0, 318.0, 242.0, 0.5)
-    assert intrinsics_for(640, 480, 1.047, "gazebo-classic", lens).cx == 320.5
+    assert tuple(intrinsics_for(640, 480, 1.047, "gazebo-classic", lens)) == (500.0, 501.0, 318.5, 242.5, 0.5)
+    assert tuple(intrinsics_for(640, 480, 1.047, "exact", lens))[2:4] == (317.5, 241.5)
+
+
+def _gz_rendering_distort(t: np.ndarray, center: tuple[float, float], k: tuple[float, ...], w: int, h: int,
+                          hfov: float | None) -> np.ndarray:
+    """gz-rendering ogre/src/OgreDistortionPass.cc Distort() with CreateRenderPass()'s texSize and focalLength,
+    written from the source: S = max(W, H), fov = FOVy * aspect (W >= H), F = S / (2 tan(fov / 2)).
+    ``hfov`` None: F = S, which is Gazebo classic's legacy Distortion::Distort (texture offsets as they are)."""
+    k1, k2, k3, p1, p2 = k
+    aspect = w / h
+    size = max(w, h)
+    f = float(size)
+    if hfov is not None:
+        fovy = 2 * math.atan(math.tan(hfov / 2) / aspect)  # OgreCamera::SetHFOV
+        f = size / (2 * math.tan(fovy * aspect / 2))
+    n = (t - np.array(center)) * (size / f)
+    x, y = n[:, 0], n[:, 1]
+    r2 = x * x + y * y
+    radial = 1 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+    dx = x * radial + p2 * (r2 + 2 * x * x) + 2 * p1 * x * y
+    dy = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return (np.array(center) * size + np.column_stack([dx, dy]) * f) / size
+
+
+def test_gz_sim_distortion_units_are_image_normalised_ones_scaled() -> None:
+    """gz-sim's k1 = classic's (image-normalised) k1 / s^2 etc., s = 2 tan(fov / 2): the two maps are identical."""
+    w, h, hfov = 640, 480, 1.2
+    s = gz_sim_distortion_scale(w, h, hfov)
+    fovy = 2 * math.atan(math.tan(0.6) / (4 / 3))
+    assert s == pytest.approx(2 * math.tan(fovy * (4 / 3) / 2), rel=1e-15)  # 1.5097..., not 2 tan(0.6) = 1.3683
+    classic = (-0.31, 0.09, 0.01, 0.002, -0.001)
+    gz = scale_distortion(classic, s)
+    assert gz[0] == pytest.approx(-0.31 / s**2) and gz[3] == pytest.approx(0.002 / s)
+    t = np.column_stack([g.ravel() for g in np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 7))])
+    center = (0.53, 0.49)
+    expected = _gz_rendering_distort(t, center, gz, w, h, hfov)
+    legacy = _gz_rendering_distort(t, center, classic, w, h, None)
+    assert np.abs(expected - legacy).max() < 1e-12
+    assert scale_distortion(gz, 1 / s) == pytest.approx(classic, rel=1e-12)
+
+
+def test_crop_magnification_hand_value() -> None:
+    """k1 = -0.2 about the centre: corner offset 0.5 (r^2 = 0.5) -> 0.5 (1 - 0.1) = 0.45, span 0.9, x 1/0.9."""
+    mx, my = crop_magnification((-0.2, 0.0, 0.0, 0.0, 0.0), (0.5, 0.5))
+    assert (mx, my) == (pytest.approx(1 / 0.9), pytest.approx(1 / 0.9))
+    assert crop_magnification((0.1, 0.0, 0.0, 0.0, 0.0), (0.5, 0.5)) == (1.0, 1.0)  # only barrel is cropped
 
 
 def test_unknown_convention_is_refused() -> None:

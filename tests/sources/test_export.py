@@ -37,10 +37,10 @@ def test_realsense_round_trip(fmt: str, tmp_path: Path) -> None:
     assert back.baseline_m == pytest.approx(real.baseline_m, rel=1e-6)
     assert np.allclose(back.T, real.T, atol=1e-9) and np.allclose(back.R, real.R, atol=1e-9)
     assert back.left.distortion.is_zero and back.image_size == (848, 480)
-    if fmt == "gz-sim":  # <lens><intrinsics> carry the principal point (gz-sim pixels: OpenCV + 0.5)
-        assert (back.left.cx_px, back.left.cy_px) == (423.0, 235.5) and warnings == []
-    else:  # classic renders centred: cx 422.5 vs 423.5 and cy 235 vs 239.5 -> hypot(1.0, 4.5) = 4.61 px
-        assert len(warnings) == 2 and all("4.61 px error (-1.00, -4.50)" in w for w in warnings)
+    # both simulators render <lens><intrinsics> (continuous pixels: OpenCV + 0.5): the off-centre principal point
+    # (422.5, 235.0) comes back: 423.0, 235.5 in gz-sim's convention, 422.5, 235.0 in the exact one
+    assert (back.left.cx_px, back.left.cy_px) == ((423.0, 235.5) if fmt == "gz-sim" else (422.5, 235.0))
+    assert warnings == []
 
 
 @pytest.mark.parametrize("name", ["gazebo_dual_camera", "xbot_u_stereo"])
@@ -71,7 +71,7 @@ def test_square_distorted_rig_round_trips_to_1e6(tmp_path: Path) -> None:
         assert back.baseline_m == pytest.approx(rig.baseline_m, rel=1e-6)
         assert np.allclose(back.R, rig.R, atol=1e-9)
         assert pytest.approx(rig.left.D, rel=1e-6, abs=1e-12) == back.left.D
-        assert not any("distortion" in w for w in warnings)
+        assert not any("converted" in w for w in warnings)  # exact on a square image
 
 
 def _displacement(coeffs: np.ndarray, w: int, h: int, f: float) -> np.ndarray:
@@ -90,21 +90,22 @@ def test_non_square_distorted_rig_round_trips_within_the_stated_limit(tmp_path: 
     back, warnings = _round_trip(distorted_rig, "sdf", tmp_path)
     assert back.left.fx_px == pytest.approx(distorted_rig.left.fx_px, rel=1e-6)
     assert back.baseline_m == pytest.approx(distorted_rig.baseline_m, rel=1e-6)
-    fit = opencv_to_gazebo_distortion(tuple(distorted_rig.left.D), width=640, height=480,
-                                      fx=distorted_rig.left.fx_px, fy=distorted_rig.left.fy_px)
+    left = distorted_rig.in_opencv_pixels().left
+    fit = opencv_to_gazebo_distortion(tuple(left.D), width=640, height=480, fx=left.fx_px, fy=left.fy_px,
+                                      principal=(left.cx_px, left.cy_px))
     assert any(f"{fit.max_px:.3f} px worst" in w for w in warnings)
     f = distorted_rig.left.fx_px
     moved = np.hypot(*(_displacement(back.left.D, 640, 480, f) - _displacement(distorted_rig.left.D, 640, 480, f)).T)
     assert moved.max() <= 2 * fit.max_px  # export fit + import fit, each within the stated worst error
-    assert any("off-centre principal point" in w for w in warnings)
+    assert not any("principal point" in w for w in warnings)  # <lens><intrinsics> carries it
 
 
 def test_fx_not_fy_and_skew_warnings_state_the_error(rig: StereoProfile) -> None:
     left = rig.left.model_copy(update={"fy_px": rig.left.fx_px * 1.01})
     profile = rig.model_copy(update={"left": left, "right": left})
     _, warnings = export_gazebo(profile, fmt="urdf")
-    # fy = fx is used: 240 px * |1/1.01 - 1| = 2.38 px at the top and bottom edges
-    assert any("fx 554.383 != fy 559.927" in w and "2.38 px error" in w for w in warnings)
+    # the image renders fy (<lens><intrinsics>); gazebo_ros' camera_info has one focal length
+    assert any("fx 554.383 != fy 559.927" in w and "camera_info publishes fx for both" in w for w in warnings)
     _, gz_warnings = export_gazebo(profile, fmt="gz-sim")
     assert not any("fy" in w for w in gz_warnings)
 
@@ -156,7 +157,7 @@ def test_cli_export_refuses_to_overwrite(tmp_path: Path, capsys: pytest.CaptureF
     assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "urdf", "-o", str(out)]) == 0
     first = out.read_text()
     captured = capsys.readouterr()
-    assert "warning: left: off-centre principal point" in captured.err
+    assert "(urdf, 0 warning(s))" in captured.out  # <lens><intrinsics> carries the off-centre principal point
     assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "sdf", "-o", str(out)]) == 2
     assert "already exists" in capsys.readouterr().err and out.read_text() == first
     assert main(["profile", "export-gazebo", "realsense_d435_848x480", "--format", "sdf", "-o", str(out),
@@ -177,3 +178,48 @@ def test_cli_from_urdf_then_export_then_import(tmp_path: Path, capsys: pytest.Ca
     assert back.left.fx_px == pytest.approx(distorted_rig.left.fx_px, rel=1e-6)
     assert back.left.cx_px == pytest.approx(distorted_rig.left.cx_px + 0.5, abs=1e-9)
     assert main(["profile", "from-urdf", str(xml), "-o", str(out)]) == 2  # exists, no --force
+
+
+def test_gz_sim_writes_gz_rendering_units_and_classic_turns_the_crop_off(distorted_rig: StereoProfile,
+                                                                        tmp_path: Path,
+                                                                        caplog: pytest.LogCaptureFixture) -> None:
+    """gz-sim's <distortion> is in gz-rendering's scaled units (classic k / s^2, s = 2 tan(fov / 2)); classic's
+    gazebo_ros plugins get borderCrop false. A classic file that keeps the crop is read with a warning saying how
+    much the crop magnifies the image."""
+    from s2r.sources.conventions import gz_sim_distortion_scale, hfov_from_focal
+
+    classic, _ = export_gazebo(distorted_rig, fmt="sdf")
+    gz, warnings = export_gazebo(distorted_rig, fmt="gz-sim")
+    left = distorted_rig.left
+    s = gz_sim_distortion_scale(640, 480, hfov_from_focal(640, left.fx_px))
+    k1_classic, k1_gz = (float(t.split("<k1>")[1].split("<")[0]) for t in (classic, gz))
+    assert k1_gz == pytest.approx(k1_classic / s**2, rel=1e-12)
+    assert "<borderCrop>false</borderCrop>" in classic and any("--render-engine ogre" in w for w in warnings)
+    cropped = tmp_path / "cropped.sdf"
+    cropped.write_text(classic.replace("<borderCrop>false</borderCrop>", ""))
+    load_description_profile(cropped)
+    assert "magnifying it" in caplog.text and "<borderCrop>false</borderCrop>" in caplog.text
+
+
+def test_classic_legacy_mode_false_reads_in_scaled_units(distorted_rig: StereoProfile, tmp_path: Path) -> None:
+    """<ignition:legacy_mode>false (gazebo-classic PR 3009) multiplies texture offsets by W / f first, so the same
+    lens is written with k1 / s^2, k2 / s^4, p / s (s = 2 tan(hfov / 2) = W / f): both files read back alike."""
+    import re
+
+    from s2r.sources.conventions import classic_distortion_scale, hfov_from_focal
+
+    legacy, _ = export_gazebo(distorted_rig, fmt="sdf")
+    a = tmp_path / "legacy.sdf"
+    a.write_text(legacy)
+
+    def rescaled(match: re.Match[str]) -> str:
+        cam_fx = distorted_rig.left.fx_px if match.start() < legacy.index('name="right"') else distorted_rig.right.fx_px
+        s = classic_distortion_scale(640, 480, hfov_from_focal(640, cam_fx))
+        powers = {"k1": 2, "k2": 4, "k3": 6, "p1": 1, "p2": 1}
+        return f"<{match[1]}>{float(match[2]) / s ** powers[match[1]]!r}</{match[1]}>"
+
+    scaled = re.sub(r"<(k1|k2|k3|p1|p2)>([^<]+)</\1>", rescaled, legacy)
+    b = tmp_path / "new_mode.sdf"
+    b.write_text(scaled.replace("<center>", "<ignition:legacy_mode>false</ignition:legacy_mode><center>"))
+    assert pytest.approx(load_description_profile(a).left.D, rel=1e-9) == load_description_profile(b).left.D
+    assert pytest.approx(load_description_profile(a).right.D, rel=1e-9) == load_description_profile(b).right.D

@@ -53,21 +53,33 @@ def test_real_lens_survives_the_gz_sim_loop(tmp_path: Path, capsys: pytest.Captu
 
 @pytest.mark.slow
 def test_real_set_through_gazebo_classic(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """Classic renders centred and ties fy to fx: export names those residuals in pixels; the rest comes back."""
+    """Classic renders <lens><intrinsics> (Camera::LoadCameraIntrinsics) and its gazebo_ros plugin's borderCrop false
+    keeps a barrel lens unmagnified: the profile comes back as gz-sim's does (lens fit aside, in the same units
+    after gz-rendering's scale), so the gz-sim loop's validate result holds for classic too."""
     data = shared_data("opencv_stereo_chessboard")
     real = tmp_path / "real.yaml"
     assert main(["calibrate", str(data), "--pattern", "9x6", "--square", "0.025", "-o", str(real)]) == 0
-    real_profile = load_profile(real)
-    for fmt in ("sdf", "urdf"):
+    real_profile = load_profile(real).in_opencv_pixels()
+    backs = {}
+    for fmt, convention in (("sdf", "gazebo-classic"), ("urdf", "gazebo-classic"), ("gz-sim", "gz-sim")):
         xml = tmp_path / f"cam.{fmt}"
         capsys.readouterr()
         assert main(["profile", "export-gazebo", str(real), "--format", fmt, "-o", str(xml)]) == 0
-        err = capsys.readouterr().err
-        assert "off-centre principal point" in err and "px error" in err and "<center>0.5 0.5</center>" in \
-            xml.read_text()
+        err, text = capsys.readouterr().err, xml.read_text()
+        assert "principal point" not in err and "px worst error" in err
+        assert f"<cx>{real_profile.left.cx_px + 0.5!r}</cx>" in text
+        if fmt != "gz-sim":
+            assert "<borderCrop>false</borderCrop>" in text and "magnifying" not in err
+        else:  # gz-sim crops a barrel lens with no switch: export says by how much
+            assert re.search(r"magnifying it 1\.1\d+ x 1\.1\d+: it renders fx 6\d\d\.\d\d, not 534\.\d\d", err)
         sim = tmp_path / f"sim_{fmt}.yaml"
-        assert main(["profile", "from-urdf", str(xml), "-o", str(sim)]) == 0
-        back = load_profile(sim)
+        assert main(["profile", "from-urdf", str(xml), "--convention", convention, "-o", str(sim)]) == 0
+        backs[fmt] = load_profile(sim).in_opencv_pixels()
+    for back in backs.values():
         assert back.baseline_m == pytest.approx(real_profile.baseline_m, abs=1e-9)
-        assert back.left.fx_px == pytest.approx(real_profile.left.fx_px, abs=1e-9)
-        assert back.left.distortion.coefficients[4] == 0.0  # no free k3: the lens stays invertible
+        for side in ("left", "right"):
+            got, want, gz = getattr(back, side), getattr(real_profile, side), getattr(backs["gz-sim"], side)
+            assert (got.fx_px, got.fy_px, got.cx_px, got.cy_px) == pytest.approx(
+                (want.fx_px, want.fy_px, want.cx_px, want.cy_px), abs=1e-9)
+            assert got.distortion.coefficients == pytest.approx(gz.distortion.coefficients, abs=1e-9)
+            assert got.distortion.coefficients[4] == 0.0  # no free k3: the lens stays invertible

@@ -75,3 +75,33 @@ def test_lint_and_from_urdf_share_one_rule(tmp_path: Path, capsys: pytest.Captur
     assert not (tmp_path / "ros" / "left.yaml").exists()
     with pytest.raises(FormatError, match="baseline-side"):
         ros_pair_from_profile(load_profile(out))
+
+
+def test_drcsim_multisense_sl_multicamera() -> None:
+    """osrf/drcsim's MultiSense SL: 800x800 at horizontal_fov 1.3962634 rad (80 deg): fx = 400 / tan(0.6981317)
+    = 476.70144 px; the right camera's pose y = -0.07 m in Gazebo's x-forward frame is 7 cm to the right."""
+    p = load_description_profile(FIXTURES / "multisense_sl_drcsim.urdf")
+    assert p.left.fx_px == pytest.approx(400 / math.tan(1.3962634 / 2), abs=1e-6)
+    assert p.T.tolist() == pytest.approx([-0.07, 0.0, 0.0], abs=1e-12)
+    assert p.left.frame_id == "left_camera_optical_frame" and p.simulation.noise_stddev == 0.007
+    findings = lint_description(FIXTURES / "multisense_sl_drcsim.urdf")
+    assert not [f for f in findings if f.severity in ("error", "warning")]
+
+
+@pytest.mark.parametrize("text, why", [
+    # PR2/pr2_common pr2_description/urdf/sensors/wge100_camera.gazebo.xacro: a macro that nothing calls
+    ('<robot xmlns:xacro="http://ros.org/wiki/xacro"><xacro:macro name="wge100_camera_gazebo_v0" params="name">'
+     '<gazebo reference="${name}_frame"><sensor name="${name}_sensor" type="camera"/></gazebo></xacro:macro></robot>',
+     "only defines xacro macros (wge100_camera_gazebo_v0)"),
+    # the same macro's body: Gazebo 0.x <sensor:camera> (pre-SDF)
+    ('<robot xmlns:sensor="http://playerstage.sourceforge.net/gazebo/xmlschema/#sensor"><link name="a_frame"/>'
+     '<gazebo reference="a_frame"><sensor:camera name="a"><imageSize>640 480</imageSize></sensor:camera></gazebo>'
+     '</robot>', "Gazebo 0.x"),
+])
+def test_pr2_era_descriptions_exit_2_naming_why(text: str, why: str, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "cam.urdf.xacro"
+    path.write_text(text)
+    assert main(["profile", "from-urdf", str(path), "-o", str(tmp_path / "p.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and why in err, err
