@@ -56,11 +56,14 @@ def register(sub: Any) -> None:
 
 
 def _pipeline(args: argparse.Namespace) -> StereoPipeline:
-    from s2r.depth.pipeline import StereoPipeline  # OpenCV loads only when a depth command runs
+    from s2r.depth.pipeline import StereoPipeline, check_side_by_side  # OpenCV loads only when a depth command runs
     from s2r.depth.postprocess import check_stages
+    from s2r.registry import load_profile
 
     post = None if args.postprocess is None else check_stages(args.postprocess)
-    return StereoPipeline(args.profile, preset=args.preset, alpha=args.alpha, num_disparities=args.num_disparities,
+    profile = load_profile(args.profile)
+    check_side_by_side(profile, path=args.profile or "$S2R_PROFILE")  # name the file of a vertical rig
+    return StereoPipeline(profile, preset=args.preset, alpha=args.alpha, num_disparities=args.num_disparities,
                           postprocess=post, resize=args.resize, fov_deg=args.fov)
 
 

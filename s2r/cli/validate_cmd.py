@@ -69,6 +69,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     tolerances = load_tolerances(args.tolerances)
     sim = load_profile(args.sim)
     real = None if args.real is None else load_profile(args.real)
+    from s2r.depth.pipeline import check_side_by_side  # OpenCV loads only when a command needs it
+
+    check_side_by_side(sim, path=args.sim)  # a vertical rig: one line now, not a confusing depth range later
+    if real is not None:
+        check_side_by_side(real, path=args.real)
     settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
     if args.distances is not None:
         try:

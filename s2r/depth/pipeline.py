@@ -29,7 +29,7 @@ from s2r.profile import StereoProfile
 from s2r.rectification import StereoRectification, stereo_rectification
 from s2r.registry import load_profile
 
-__all__ = ["PRESETS", "DepthResult", "StereoPipeline"]
+__all__ = ["PRESETS", "DepthResult", "StereoPipeline", "check_side_by_side"]
 
 Image = NDArray[np.uint8]
 
@@ -124,6 +124,7 @@ class StereoPipeline:
 
     def _build(self, profile: StereoProfile) -> _Geometry:
         rect = stereo_rectification(profile, alpha=self.alpha, fov_deg=self.fov_deg)
+        check_side_by_side(profile, rect)
         config = resolve_preset(self.preset, profile, fx_px=rect.fx_px, baseline_m=rect.baseline_m,
                                 num_disparities=self.num_disparities)
         return _Geometry(profile=profile, rectification=rect, maps=rectify_maps(profile, rect), config=config)
@@ -213,6 +214,31 @@ class StereoPipeline:
         disparity, depth, valid = to_metric(raw, geo.rectification, min_disparity=geo.config.min_disparity)
         return DepthResult(rect_left=rl, rect_right=rr, disparity=disparity, depth=depth, valid=valid,
                            Q=geo.rectification.Q)
+
+
+def check_side_by_side(profile: StereoProfile, rect: StereoRectification | None = None,
+                       path: str | Path | None = None) -> None:
+    """Refuse a rig the row-wise matcher cannot use: OpenCV rectifies a mostly vertical baseline into a
+    vertical pair (``P2[1, 3] != 0``, rectified baseline 0), and a right camera left of the left one gives
+    negative disparities; either way every pixel would come out invalid (or depth 0) without a word.
+
+    Args:
+        profile: the stereo profile.
+        rect: its rectification (default: computed with alpha 0).
+        path: the profile's file or name, for the error message.
+    """
+    rect = stereo_rectification(profile) if rect is None else rect
+    tx_px, ty_px = float(rect.P2[0, 3]), float(rect.P2[1, 3])
+    x, y, z = (float(v) for v in -profile.R.T @ profile.T)
+    where = f"the right camera sits at ({x:+.3f}, {y:+.3f}, {z:+.3f}) m in the left optical frame"
+    if abs(ty_px) > abs(tx_px):
+        raise DepthError(f"vertical stereo rig ({where}): s2r matches along image rows, so it needs a "
+                         "side-by-side pair", path=path, field="extrinsics.translation_m",
+                         hint="rotate both images 90 degrees and use a profile of the rotated rig")
+    if rect.baseline_m <= 0:
+        raise DepthError(f"the 'right' camera is to the LEFT of the left one ({where}): disparities would be "
+                         "negative", path=path, field="extrinsics.translation_m",
+                         hint="swap the left and right images and the profile's cameras")
 
 
 def _scaled_profile(profile: StereoProfile, size: tuple[int, int]) -> StereoProfile:
