@@ -108,7 +108,13 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
                                                                                       else [])
     for name in names:  # refuse before computing or writing anything
         check_output_free(args.output / name, force=args.force)
-    result = pipeline.compute(left, right)
+    try:
+        result = pipeline.compute(left, right)
+    except DepthError as exc:  # size mismatch between the images or with the profile: name the image
+        if exc.path is not None:
+            raise
+        raise DepthError(exc.message, path=args.right if exc.field == "right" else args.left, field=exc.field,
+                         hint=exc.hint) from None
     depth_range = _depth_range(args, pipeline)
     removed = 0
     if depth_range is not None:
@@ -138,6 +144,10 @@ def _run_sequence(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     from s2r.depth.outputs import read_image, write_camera_info
     from s2r.depth.sequence import pair_images, run_sequence
 
+    for folder in (args.left_dir, args.right_dir):  # NN_depth.png there would be read as frames next time
+        if args.output.resolve() == folder.resolve():
+            raise DepthError("the output folder is an input folder: its depth PNGs would be read as images of "
+                             "the next run", path=args.output, field="--output", hint="choose another -o folder")
     pairs = pair_images(args.left_dir, args.right_dir)
     prepare_output_dir(args.output, force=args.force)
     check_output_free(args.output / "camera_info.yaml", force=args.force)

@@ -149,6 +149,13 @@ class StereoPipeline:
                 f"images are {size[0]}x{size[1]} but profile {self.profile.name} is {expected[0]}x{expected[1]}",
                 field="image size", hint="pass images of the profile's size, or resize=True (--resize) to rescale "
                 "the intrinsics")
+        sx, sy = size[0] / expected[0], size[1] / expected[1]
+        if abs(sx / sy - 1.0) > 0.01:  # another aspect ratio is a crop or another sensor mode, not a rescale
+            raise DepthError(
+                f"images are {size[0]}x{size[1]} but profile {self.profile.name} is {expected[0]}x{expected[1]}: "
+                f"another aspect ratio ({size[0] / size[1]:.3f} vs {expected[0] / expected[1]:.3f}) means the camera "
+                "crops, and rescaling the intrinsics would give wrong depth", field="image size",
+                hint="use a profile of this image size (calibrate it or import the camera's own calibration)")
         with self._lock:
             geo = self._geometries.setdefault(size, self._build(_scaled_profile(self.profile, size)))
         return geo

@@ -71,7 +71,7 @@ def run_sequence(
     try:
         for index, (left, right) in enumerate(pairs):
             read = reader.submit(_read_pair, left, right)
-            computed = computer.submit(_compute_after, pipeline, read)
+            computed = computer.submit(_compute_after, pipeline, read, left)
             prefix = frame_prefix(index, total)
             pending.append(writer.submit(_write_after(out, computed, prefix, ply=ply, force=force,
                                                       depth_range_m=depth_range_m)))
@@ -93,8 +93,13 @@ def _read_pair(left: Path, right: Path) -> Pair:
     return read_image(left), read_image(right)
 
 
-def _compute_after(pipeline: StereoPipeline, read: Future[Pair]) -> DepthResult:
-    return pipeline.compute(*read.result())
+def _compute_after(pipeline: StereoPipeline, read: Future[Pair], left: Path) -> DepthResult:
+    try:
+        return pipeline.compute(*read.result())
+    except DepthError as exc:  # e.g. one frame of another size: say which file
+        if exc.path is not None:
+            raise
+        raise DepthError(exc.message, path=left, field=exc.field, hint=exc.hint) from None
 
 
 def _write_after(out: Path, computed: Future[DepthResult], prefix: str, *, ply: bool, force: bool,
