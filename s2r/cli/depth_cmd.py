@@ -80,7 +80,13 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
+    if args.workers < 1:
+        raise DepthError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
     pipeline = _pipeline(args)
+    if args.fov is not None and pipeline.profile.left.distortion.model != "equidistant":  # was silently ignored
+        raise DepthError(f"--fov sets the rectified field of fisheye (equidistant) profiles; {pipeline.profile.name} "
+                         f"is {pipeline.profile.left.distortion.model}", field="--fov",
+                         hint="drop --fov, or use --alpha to keep more of a pinhole image")
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 
 

@@ -79,3 +79,16 @@ def test_sequence_output_into_an_input_folder_is_refused(tmp_path: Path, capsys:
     assert main(args) == 2
     assert "the output folder is an input folder" in _last_error(capsys)
     assert sorted(p.name for p in (tmp_path / side).iterdir()) == ["0001.png"]
+
+
+@pytest.mark.parametrize(("extra", "words"), [
+    (["--fov", "60"], "--fov: --fov sets the rectified field of fisheye"),  # was silently ignored on a pinhole
+    (["--workers", "0"], "--workers: must be at least 1"),
+])
+def test_options_that_would_be_ignored_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                   extra: list[str], words: str) -> None:
+    left, right = _image(tmp_path / "l.png", 848, 480), _image(tmp_path / "r.png", 848, 480, 1)
+    out = tmp_path / "o"
+    assert main(["depth", "--profile", PROFILE, str(left), str(right), "-o", str(out), *extra]) == 2
+    assert words in _last_error(capsys)
+    assert not out.exists()
