@@ -66,6 +66,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     if args.jobs is not None and args.jobs < 1:
         raise ValidateError(f"must be at least 1, got {args.jobs}", field="--jobs")
+    if args.seed < 0:  # numpy's generators take non-negative seeds only (was an internal error)
+        raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)
     sim = load_profile(args.sim)
     real = None if args.real is None else load_profile(args.real)
