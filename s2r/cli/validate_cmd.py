@@ -82,6 +82,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             settings = dataclasses.replace(settings, distances_m=parse_distances(args.distances))
         except ValueError as exc:
             raise ValidateError(str(exc), field="--distances") from None
+    else:  # the default planes a short-range rig cannot see are dropped with a warning, not a refusal
+        from s2r.validate.run import distances_in_view
+
+        settings = dataclasses.replace(settings, distances_m=distances_in_view(
+            [p for p in (sim, real) if p is not None], settings.preset, settings.distances_m))
     recording = _recording(args, real is not None)
     if args.report:
         prepare_output_dir(args.report, force=args.force)  # fail before the work, not after

@@ -35,7 +35,8 @@ from s2r.validate.verdict import (
     recovery_checks,
 )
 
-__all__ = ["FULL", "QUICK", "RecordingSpec", "Settings", "ValidationResult", "check_distances", "validate"]
+__all__ = ["FULL", "QUICK", "RecordingSpec", "Settings", "ValidationResult", "check_distances", "distances_in_view",
+           "validate"]
 
 log = logging.getLogger(__name__)
 
@@ -113,18 +114,41 @@ class RecordingSpec:
     square_m: float = 0.025
 
 
-def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[float]) -> None:
-    """Raise :class:`ValidateError` when the preset's disparity range cannot see every requested distance."""
+def visible_range_m(profile: StereoProfile, preset: str) -> tuple[float, float, int]:
+    """Nearest and farthest depth (metres) the preset's disparity range sees through ``profile``, and that range
+    (pixels)."""
     from s2r.depth.pipeline import StereoPipeline
 
     pipe = StereoPipeline(profile, preset=preset)
     fb = pipe.rectification.fx_px * pipe.rectification.baseline_m
     d_max = pipe.config.min_disparity + pipe.config.num_disparities - 1
-    nearest, farthest = fb / max(d_max, 1), fb / max(pipe.config.min_disparity, 1)
+    return fb / max(d_max, 1), fb / max(pipe.config.min_disparity, 1), pipe.config.num_disparities
+
+
+def distances_in_view(profiles: Sequence[StereoProfile], preset: str, distances_m: Sequence[float]
+                      ) -> tuple[float, ...]:
+    """The default ``distances_m`` every profile's matcher sees, with a warning naming the ones dropped (a 4 mm
+    or 64x48 rig sees under 2 m); all of them when fewer than two are seen (:func:`check_distances` then
+    refuses)."""
+    ranges = {p.name: visible_range_m(p, preset)[:2] for p in profiles}
+    kept = tuple(d for d in distances_m if all(lo <= d <= hi for lo, hi in ranges.values()))
+    if len(kept) < 2:  # one plane is no accuracy curve: keep them all and let check_distances refuse
+        return tuple(distances_m)
+    if len(kept) < len(distances_m):
+        seen = "; ".join(f"{name} sees {lo:.2f}-{hi:.1f} m" for name, (lo, hi) in ranges.items())
+        log.warning("validating at %s m only, not %s m (%s; pass --distances to choose)",
+                    ", ".join(f"{d:g}" for d in kept),
+                    ", ".join(f"{d:g}" for d in distances_m if d not in kept), seen)
+    return kept
+
+
+def check_distances(profile: StereoProfile, preset: str, distances_m: Sequence[float]) -> None:
+    """Raise :class:`ValidateError` when the preset's disparity range cannot see every requested distance."""
+    nearest, farthest, disparities = visible_range_m(profile, preset)
     unseen = [d for d in distances_m if d < nearest or d > farthest]
     if unseen:
         raise ValidateError(
-            f"the {preset!r} matcher of profile {profile.name} ({pipe.config.num_disparities} disparities) sees "
+            f"the {preset!r} matcher of profile {profile.name} ({disparities} disparities) sees "
             f"{nearest:.2f}-{farthest:.1f} m, not {', '.join(f'{d:g}' for d in unseen)} m",
             field="matcher", hint="lower matcher.min_depth_m / num_disparities in the profile, choose another "
             "--preset, or pass --distances inside that range")
