@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -18,6 +19,11 @@ if TYPE_CHECKING:
     from s2r.rectification import StereoRectification
 
 __all__ = ["register"]
+
+log = logging.getLogger(__name__)
+
+#: Below this valid fraction a depth map is almost surely wrong input, not a hard scene: say so.
+LOW_VALID_FRACTION = 0.01
 
 
 def register(sub: Any) -> None:
@@ -130,6 +136,9 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
                                      "rectified_left", force=args.force))
     valid_fraction = float(result.valid.mean())
+    if valid_fraction < LOW_VALID_FRACTION:  # a silent 0 % looks like a result; it is almost always the input
+        log.warning("%s: only %.1f %% of the pixels have depth: check that LEFT and RIGHT are not swapped and "
+                    "are this profile's cameras, and the profile's depth range", args.left, 100 * valid_fraction)
     summary: dict[str, Any] = {"profile": pipeline.profile.name, "preset": pipeline.preset,
                "num_disparities": pipeline.config.num_disparities, "postprocess": list(pipeline.postprocess),
                "valid_fraction": valid_fraction, "out_of_range_removed": removed,

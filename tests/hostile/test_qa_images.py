@@ -92,3 +92,15 @@ def test_options_that_would_be_ignored_are_refused(tmp_path: Path, capsys: pytes
     assert main(["depth", "--profile", PROFILE, str(left), str(right), "-o", str(out), *extra]) == 2
     assert words in _last_error(capsys)
     assert not out.exists()
+
+
+def test_no_valid_depth_is_loudly_wrong(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Two copies of one image (zero disparity everywhere, beyond max_depth_m): 0 % valid used to pass in
+    silence; the depth files are still written, with a warning saying what to check."""
+    left = _image(tmp_path / "l.png", 848, 480)
+    right = tmp_path / "r.png"
+    right.write_bytes(left.read_bytes())
+    assert main(["depth", "--profile", PROFILE, str(left), str(right), "-o", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: " in err and "only 0.0 % of the pixels have depth" in err
+    assert (tmp_path / "o" / "depth.png").is_file()
