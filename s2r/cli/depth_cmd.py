@@ -77,6 +77,8 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
+    if args.fov is not None and not 10.0 <= args.fov <= 170.0:  # NaN fails too
+        raise DepthError(f"must be 10-170 degrees, got {args.fov}", field="--fov", hint="e.g. --fov 90")
     pipeline = _pipeline(args)
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 
