@@ -2,9 +2,13 @@
 
 Three layouts are understood:
 
-- a folder with ``left/`` and ``right/`` subfolders (``left/00.png`` pairs with ``right/00.png``);
+- a folder with two camera subfolders: ``left/`` and ``right/`` (``left/00.png`` pairs with ``right/00.png``),
+  Kalibr/EuRoC's ``cam0/`` and ``cam1/`` (images directly inside or in ``camN/data/``; cam0 is taken as the
+  left camera, and the calibration's swap check says so when it is not) or KITTI's ``image_0/`` and
+  ``image_1/``; subfolder names are matched without regard to case;
 - a folder of ``left*`` / ``right*`` files paired by the (last) number in their names
-  (``left01.jpg`` with ``right01.jpg``; a missing partner is named, not guessed);
+  (``left01.jpg`` with ``right01.jpg``; a missing partner is named, not guessed), or of files that carry
+  ``left`` / ``right`` elsewhere in their names (``0001_left.png``);
 - two globs (``--left 'cam0/*.png' --right 'cam1/*.png'``) paired by that number, or by sorted order
   when the names carry no numbers.
 """
@@ -42,6 +46,31 @@ class PairSet:
 def _images_in(folder: Path, prefix: str = "") -> list[Path]:
     return sorted(p for p in folder.iterdir()
                   if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES and p.name.lower().startswith(prefix))
+
+
+#: Camera subfolder pairs (left, right) understood, in order of preference.
+CAMERA_SUBFOLDERS = (("left", "right"), ("cam0", "cam1"), ("image_0", "image_1"))
+
+
+def _camera_subfolders(folder: Path) -> tuple[Path, Path] | None:
+    """The (left, right) image folders of ``folder`` per :data:`CAMERA_SUBFOLDERS` (a ``data/`` folder inside
+    one is used when it holds the images), or None."""
+    children = {p.name.lower(): p for p in folder.iterdir() if p.is_dir()}
+    for left_name, right_name in CAMERA_SUBFOLDERS:
+        if left_name in children and right_name in children:
+            return _data_folder(children[left_name]), _data_folder(children[right_name])
+    return None
+
+
+def _data_folder(folder: Path) -> Path:
+    """``folder/data`` when the images are there (EuRoC / Kalibr bag extraction), else ``folder``."""
+    return folder / "data" if (folder / "data").is_dir() and not _images_in(folder) else folder
+
+
+def _images_named(folder: Path, word: str) -> list[Path]:
+    """Images of ``folder`` whose names contain ``word`` (case-insensitive) and not the other side's word."""
+    other = "right" if word == "left" else "left"
+    return [p for p in _images_in(folder) if word in p.name.lower() and other not in p.name.lower()]
 
 
 def _key(path: Path, *, prefix: str = "") -> str:
@@ -91,10 +120,14 @@ def find_stereo_pairs(folder: Path | None = None, *, left_glob: str | None = Non
     if not folder.is_dir():
         raise CalibrationError("input folder not found" if not folder.exists() else "input is not a folder",
                                path=folder, hint="pass a folder with left/ and right/ or left*/right* images")
-    if (folder / "left").is_dir() and (folder / "right").is_dir():
-        return pair_by_number(_images_in(folder / "left"), _images_in(folder / "right"))
+    subfolders = _camera_subfolders(folder)
+    if subfolders is not None:
+        return pair_by_number(_images_in(subfolders[0]), _images_in(subfolders[1]))
     left, right = _images_in(folder, "left"), _images_in(folder, "right")
     if not left and not right:
+        left, right = _images_named(folder, "left"), _images_named(folder, "right")
+        if left and right:
+            return pair_by_number(left, right)
         raise CalibrationError("no left/ and right/ subfolders and no left*/right* images", path=folder,
                                hint="put the images in left/ and right/, or name them leftNN.png / rightNN.png")
     return pair_by_number(left, right, left_prefix="left", right_prefix="right")
@@ -109,8 +142,10 @@ def find_mono_images(folder: Path | None = None, *, image_glob: str | None = Non
     folder = Path(folder)
     if not folder.is_dir():
         raise CalibrationError("input folder not found", path=folder, hint="pass a folder of images")
-    if (folder / "left").is_dir():
-        folder = folder / "left"
+    children = {p.name.lower(): p for p in folder.iterdir() if p.is_dir()}
+    first = next((children[name] for name, _ in CAMERA_SUBFOLDERS if name in children), None)
+    if first is not None:
+        folder = _data_folder(first)
     images = _images_in(folder, "left") or _images_in(folder)
     if not images:
         raise CalibrationError("no image files in the folder", path=folder,

@@ -25,7 +25,8 @@ def register(sub: Any) -> None:
         description="Chessboard calibration into a real s2r profile, with per-view errors, outliers, "
                     "standard deviations, coverage and an optional HTML report.")
     p.add_argument("input", nargs="?", type=Path,
-                   help="folder with left/ and right/ subfolders, or with leftNN/rightNN image files")
+                   help="folder with left/ and right/ (or cam0/ cam1/, image_0/ image_1/) subfolders, or "
+                        "with leftNN/rightNN image files")
     p.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6)")
     p.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
     p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")

@@ -61,3 +61,22 @@ def test_mono_prefers_left_images(tmp_path: Path) -> None:
     assert [p.name for p in find_mono_images(tmp_path)] == ["left01.png", "left02.png"]
     _touch(tmp_path / "cam", "img1.png", "img2.png")
     assert [p.name for p in find_mono_images(tmp_path / "cam")] == ["img1.png", "img2.png"]
+
+
+@pytest.mark.parametrize(("left", "right"), [("cam0/data", "cam1/data"), ("cam0", "cam1"), ("Left", "Right"),
+                                             ("image_0", "image_1")])
+def test_camera_subfolders_of_kalibr_euroc_and_kitti_layouts(tmp_path: Path, left: str, right: str) -> None:
+    # EuRoC / Kalibr extraction: camN/data/<stamp ns>.png; KITTI: image_0/000000.png
+    _touch(tmp_path / left, "1403636579763555584.png", "1403636579813555456.png")
+    _touch(tmp_path / right, "1403636579763555584.png", "1403636579813555456.png")
+    pairs = find_stereo_pairs(tmp_path)
+    assert len(pairs.left) == 2 and all(p.parent == tmp_path / left for p in pairs.left)
+    assert all(p.parent == tmp_path / right for p in pairs.right)
+
+
+def test_side_named_anywhere_in_file_names(tmp_path: Path) -> None:
+    _touch(tmp_path, "0001_left.png", "0001_right.png", "0002_left.png", "0002_right.png", "0003_left.png")
+    pairs = find_stereo_pairs(tmp_path)
+    assert [(a.name, b.name) for a, b in zip(pairs.left, pairs.right, strict=True)] == [
+        ("0001_left.png", "0001_right.png"), ("0002_left.png", "0002_right.png")]
+    assert [p.name for p in pairs.unpaired] == ["0003_left.png"]
