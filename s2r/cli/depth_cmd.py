@@ -88,6 +88,8 @@ def _cmd_depth(args: argparse.Namespace) -> int:
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
     if args.workers < 1:
         raise DepthError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    if args.fov is not None and not 10.0 <= args.fov <= 170.0:  # NaN fails too
+        raise DepthError(f"must be 10-170 degrees, got {args.fov}", field="--fov", hint="e.g. --fov 90")
     pipeline = _pipeline(args)
     if args.fov is not None and pipeline.profile.left.distortion.model != "equidistant":  # was silently ignored
         raise DepthError(f"--fov sets the rectified field of fisheye (equidistant) profiles; {pipeline.profile.name} "

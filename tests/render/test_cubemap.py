@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+from s2r.cli import main
 from s2r.errors import S2RError
 from s2r.profile import Distortion
 from s2r.rectification import DEFAULT_FISHEYE_FOV_DEG, stereo_rectification
@@ -121,3 +123,10 @@ def test_fisheye_rectification_caps_the_field_of_view() -> None:
     assert 2 * math.degrees(math.atan(0.5 * 848 / wider.fx_px)) == pytest.approx(120.0)
     with pytest.raises(S2RError, match="field of view"):
         stereo_rectification(profile, fov_deg=179.0)
+
+
+def test_depth_fov_out_of_range_is_a_one_line_refusal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["depth", str(tmp_path / "l.png"), str(tmp_path / "r.png"), "--profile", "gazebo_dual_camera",
+                 "--fov", "200", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "--fov" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
