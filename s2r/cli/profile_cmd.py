@@ -166,6 +166,10 @@ def _cmd_show(args: argparse.Namespace) -> int:
     t = summary["T_m"]
     print(f"  baseline {1000 * summary['baseline_m']:.2f} mm   T = ({t[0]:+.4f}, {t[1]:+.4f}, {t[2]:+.4f}) m"
           f"   rotation {summary['rotation_deg']:.3f}°")
+    x, y, _ = (float(v) for v in -profile.R.T @ profile.T)  # right camera in the left optical frame, metres
+    if abs(y) > abs(x):  # the figures below assume a side-by-side pair
+        print(f"  warning: vertical rig (right camera {abs(y) * 100:.1f} cm {'below' if y > 0 else 'above'}): "
+              "s2r depth and validate need a side-by-side pair")
     near, far = summary["depth_range_m"]
     print(f"  matcher {summary['matcher']}, {summary['num_disparities']} disparities: sees {near:.2f}-{far:.1f} m")
     rms = "  ".join(f"{k} {v:.1f}" for k, v in summary["depth_rms_mm"].items())

@@ -64,3 +64,11 @@ def test_side_by_side_rigs_still_run(tmp_path: Path) -> None:
 
     check_side_by_side(load_profile(_profile(tmp_path, "b4mm", [-0.004, 0.0, 0.0])))
     check_side_by_side(load_profile(_profile(tmp_path, "diag", [-0.05, 0.03, 0.0])))
+
+
+def test_profile_show_flags_a_vertical_rig(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["profile", "show", str(_profile(tmp_path, "vertical", [0.0, -0.05, 0.0]))]) == 0
+    assert "warning: vertical rig (right camera 5.0 cm below): s2r depth and validate need a side-by-side pair" in (
+        capsys.readouterr().out)
+    assert main(["profile", "show", str(PROFILE)]) == 0
+    assert "vertical" not in capsys.readouterr().out
