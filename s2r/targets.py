@@ -33,6 +33,7 @@ from s2r.fileio import parse_yaml, read_text_file
 __all__ = [
     "ARUCO_DICTIONARIES",
     "DETECTOR_REVISION",
+    "AnyTarget",
     "AprilGridTarget",
     "CharucoTarget",
     "CheckerboardTarget",
@@ -183,8 +184,10 @@ class AprilGridTarget(_Target):
         return f"aprilgrid {self.tagCols}x{self.tagRows} tags of {self.tagSize * 1000:g} mm"
 
 
-Target = Annotated[CheckerboardTarget | CharucoTarget | AprilGridTarget, Field(discriminator="target_type")]
-_ADAPTER: TypeAdapter[CheckerboardTarget | CharucoTarget | AprilGridTarget] = TypeAdapter(Target)
+#: Any target a file can describe (the type every detector, solver and renderer takes).
+AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
+Target = Annotated[AnyTarget, Field(discriminator="target_type")]
+_ADAPTER: TypeAdapter[AnyTarget] = TypeAdapter(Target)
 
 
 def _message(exc: ValidationError) -> tuple[str, str]:
@@ -206,7 +209,7 @@ def _message(exc: ValidationError) -> tuple[str, str]:
 
 
 def target_from_mapping(data: Any, *, path: str | Path | None = None
-                        ) -> CheckerboardTarget | CharucoTarget | AprilGridTarget:
+                        ) -> AnyTarget:
     """Validate a parsed target mapping; CalibrationError naming the file and the field otherwise."""
     if not isinstance(data, dict):
         raise CalibrationError("expected a YAML mapping (target_type: ..., ...)", path=path,
@@ -219,7 +222,7 @@ def target_from_mapping(data: Any, *, path: str | Path | None = None
         raise CalibrationError(msg, path=path, field=field, hint="fix the target file") from None
 
 
-def load_target(path: str | Path) -> CheckerboardTarget | CharucoTarget | AprilGridTarget:
+def load_target(path: str | Path) -> AnyTarget:
     """Read a TARGET.yaml (Kalibr aprilgrid / checkerboard, or charuco); one-line errors naming the field."""
     source = Path(path)
     text = read_text_file(source, error=CalibrationError)

@@ -29,9 +29,7 @@ from s2r.fileio import sha256_file
 from s2r.imageio import oversize_reason
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
-from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
-
-AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
+from s2r.targets import AnyTarget
 
 __all__ = ["BagFrame", "bag_image_topics", "calibrate_stereo_bag", "open_bag", "paired_bag_frames"]
 

@@ -45,9 +45,7 @@ from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
 
 if TYPE_CHECKING:
-    from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
-
-    AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
+    from s2r.targets import AnyTarget
 
 __all__ = [
     "DETECTOR_VERSION",

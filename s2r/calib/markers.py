@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import detect_board
-from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+from s2r.targets import AnyTarget, AprilGridTarget, CharucoTarget, CheckerboardTarget
 
 __all__ = [
     "MIN_CORNERS",
@@ -40,7 +40,6 @@ __all__ = [
 Ids = NDArray[np.int32]
 Corners = NDArray[np.float32]
 TargetCorners = tuple[Ids, Corners]
-AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 
 #: Fewest corners a view must show (and spread over two dimensions of the board) to be used.
 MIN_CORNERS = 6

@@ -48,12 +48,11 @@ from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
-from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+from s2r.targets import AnyTarget, CheckerboardTarget
 
 __all__ = ["calibrate_mono_target", "calibrate_stereo_target", "calibrate_stereo_target_detections"]
 
 log = logging.getLogger(__name__)
-AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 _STEREO_ROUNDS = 4
 
 

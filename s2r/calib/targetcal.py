@@ -37,7 +37,7 @@ from s2r.calib.solve import (
 from s2r.calib.views import MIN_VIEWS, check_sizes, match_corner_order, too_few_error
 from s2r.errors import CalibrationError
 from s2r.profile import CalibrationQuality, Camera, CameraUncertainty, Distortion, DroppedView, SourceFile
-from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+from s2r.targets import AnyTarget, CharucoTarget, CheckerboardTarget
 
 __all__ = [
     "LENSES",
@@ -53,7 +53,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 Corners = NDArray[np.float32]
 Ids = NDArray[np.int32]
-AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 #: ``--lens`` choices: the projection model behind the distortion terms.
 LENSES = ("pinhole", "fisheye")
 _MAX_ROUNDS = 5

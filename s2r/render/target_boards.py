@@ -23,12 +23,11 @@ from s2r.profile import StereoProfile
 from s2r.render.distortion import project_points
 from s2r.render.poses import BoardGeometry
 from s2r.render.textures import DARK, LIGHT, checkerboard_texture
-from s2r.targets import AprilGridTarget, CharucoTarget, CheckerboardTarget
+from s2r.targets import AnyTarget, AprilGridTarget, CharucoTarget, CheckerboardTarget
 
 __all__ = ["TargetLayout", "cut_views", "target_layout"]
 
 FloatArray = NDArray[np.float64]
-AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget
 #: Texels per ChArUco square / AprilGrid tag / chessboard square.
 TEXELS = 120
 #: Share of a cut view's corners that must stay inside each image (the rest is cut by the edge).
