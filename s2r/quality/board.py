@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import detect_board
 from s2r.quality.metrics import Plane
 
-__all__ = ["BoardView", "board_object_points", "find_board", "normalised_rays", "roi_mask"]
+__all__ = ["BoardView", "board_object_points", "find_board", "normalised_rays", "roi_mask", "roi_quad"]
 
 FloatArray = NDArray[np.float64]
 
@@ -66,10 +66,15 @@ def find_board(grey: NDArray[np.uint8], K: FloatArray, D: FloatArray, pattern: t
     return BoardView(corners, T, Plane((float(normal[0]), float(normal[1]), float(normal[2])), offset), rms)
 
 
-def roi_mask(corners: NDArray[np.float32], pattern: tuple[int, int], size: tuple[int, int]) -> NDArray[np.bool_]:
-    """(H, W) bool mask of the quadrilateral through the outermost inner corners, for an image ``(W, H)``."""
+def roi_quad(corners: NDArray[np.float32], pattern: tuple[int, int]) -> NDArray[np.float32]:
+    """(4, 2) pixels of the outermost inner corners, in order around the board: the region of interest."""
     cols, rows = pattern
-    quad = corners[[0, cols - 1, cols * rows - 1, cols * (rows - 1)]]
+    return np.asarray(corners, np.float32).reshape(-1, 2)[[0, cols - 1, cols * rows - 1, cols * (rows - 1)]]
+
+
+def roi_mask(corners: NDArray[np.float32], pattern: tuple[int, int], size: tuple[int, int]) -> NDArray[np.bool_]:
+    """(H, W) bool mask of the quadrilateral :func:`roi_quad`, for an image ``(W, H)``."""
+    quad = roi_quad(corners, pattern)
     mask = np.zeros((size[1], size[0]), np.uint8)
     cv2.fillConvexPoly(mask, np.round(quad * 16).astype(np.int32), 1, lineType=cv2.LINE_8, shift=4)
     return mask.astype(bool)

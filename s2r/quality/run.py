@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
-from s2r.quality.board import BoardView, find_board, normalised_rays, roi_mask
+from s2r.quality.board import BoardView, find_board, normalised_rays, roi_mask, roi_quad
 from s2r.quality.metrics import MISMATCH_NOTE_PCT, FrameQuality, frame_quality, plane_depth, temporal_noise_pct
 from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, summarise_bins
 
@@ -98,15 +98,17 @@ class _Repeats:
 def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb: float
                  ) -> tuple[FrameQuality, NDArray[np.bool_], tuple[float, float] | None]:
     """The frame's metrics on the board's ROI, the ROI mask, and the board's (nearest, farthest) depth in metres
-    over the ROI from its PnP plane (None when the plane misses every ray)."""
+    over the ROI from its PnP plane (None when the plane misses the ROI). A plane's depth over the convex ROI is
+    extreme at the ROI's corners, so the span comes from those four rays."""
     h, w = view.depth_m.shape
     mask = roi_mask(board.corners, pattern, (w, h))
     ys, xs = np.nonzero(mask)
     rays = normalised_rays(np.column_stack([xs, ys]).astype(np.float64), view.K, view.D)
-    truth_z = plane_depth(board.plane, rays)
-    finite = truth_z[np.isfinite(truth_z)]
-    span = (float(finite.min()), float(finite.max())) if finite.size else None
     quality = frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane)
+    corner_z = plane_depth(board.plane, normalised_rays(roi_quad(board.corners, pattern).astype(np.float64),
+                                                        view.K, view.D))
+    finite = corner_z[np.isfinite(corner_z)]
+    span = (float(finite.min()), float(finite.max())) if finite.size else None
     return quality, mask, span
 
 
@@ -160,9 +162,9 @@ def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, p
             poses.append(None)
         else:
             quality, mask, span = _score_board(view, board, pattern, fb_px_m)
-            quality = _range_note(quality, span, visible_m)
             if quality.outlier_pct is not None and quality.outlier_pct > MISMATCH_NOTE_PCT:
-                log.warning("%s: %s", quality.image, quality.note)
+                log.warning("%s: %s", quality.image, quality.note)  # the mismatch note, before any range note
+            quality = _range_note(quality, span, visible_m)
             group = repeats.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m)
             frames.append(FrameQuality(**{**quality.as_dict(), "pose_group": group}))
             poses.append(board.T_cam_board)
