@@ -236,7 +236,10 @@ def read_regular_file(path: str | Path, *, limit: int) -> bytes:
         if info.st_size > limit:
             raise NotARegularFile(f"{info.st_size} bytes, over the {limit >> 20} MiB s2r reads for this input")
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            return fh.read(limit + 1)[:limit]
+            data = fh.read(limit + 1)
+        if len(data) > limit:  # the file grew after fstat: refuse rather than return a cut copy
+            raise NotARegularFile(f"over the {limit >> 20} MiB s2r reads for this input (it grew while being read)")
+        return data
     finally:
         os.close(fd)
 
