@@ -33,6 +33,7 @@ from s2r.fileio import parse_yaml, read_text_file
 __all__ = [
     "ARUCO_DICTIONARIES",
     "DETECTOR_REVISION",
+    "MAX_SQUARE_M",
     "AnyTarget",
     "AprilGridTarget",
     "CharucoTarget",
@@ -183,6 +184,11 @@ class AprilGridTarget(_Target):
     def describe(self) -> str:
         return f"aprilgrid {self.tagCols}x{self.tagRows} tags of {self.tagSize * 1000:g} mm"
 
+
+#: Largest chessboard square (m) accepted from ``--square`` and by the board renderer: printed boards have
+#: squares of millimetres to ~0.2 m; beyond 2 m the value is millimetres or a typo, and 1e308 overflows the
+#: float32 board model.
+MAX_SQUARE_M = 2.0
 
 #: Any target a file can describe (the type every detector, solver and renderer takes).
 AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget

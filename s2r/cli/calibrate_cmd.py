@@ -81,11 +81,6 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
     return lens, None
 
 
-#: Largest chessboard square accepted (m): printed boards have squares of millimetres to ~0.2 m; beyond a
-#: metre the value is millimetres or a typo, and 1e308 overflows the float32 board model.
-MAX_SQUARE_M = 2.0
-
-
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     try:
         pattern = parse_pattern(args.pattern)
@@ -94,6 +89,8 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not args.square > 0:
         raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
                                hint="give the square edge in metres, e.g. 0.025")
+    from s2r.targets import MAX_SQUARE_M  # local: the CLI does not build the target models at start-up
+
     if not args.square <= MAX_SQUARE_M:
         raise CalibrationError(f"square size {args.square:g} m is over {MAX_SQUARE_M:g} m", field="--square",
                                hint="--square is the square edge in metres; for 25 mm give --square 0.025")

@@ -27,7 +27,7 @@ from s2r.render.rig import StereoJob, check_render_options, render_stereo_images
 from s2r.render.target_boards import TargetLayout, cut_views, target_layout
 from s2r.render.textures import checkerboard_texture, write_png
 from s2r.render.world import Surface, write_mesh
-from s2r.targets import AnyTarget, CheckerboardTarget
+from s2r.targets import MAX_SQUARE_M, AnyTarget, CheckerboardTarget
 
 #: Share of views cut by the image edge for targets identified corner by corner (ChArUco, AprilGrid).
 DEFAULT_CUT_SHARE = 0.4
@@ -77,8 +77,9 @@ def _check_board(pattern: tuple[int, int], square_m: float, views: int) -> None:
     if len(pattern) != 2 or min(pattern) < 2:
         raise RenderError(f"pattern must be two counts of inner corners >= 2, got {pattern}", field="pattern",
                           hint="e.g. --pattern 9x6")
-    if not 0 < square_m <= 2.0:
-        raise RenderError(f"square size must be 0-2 m, got {square_m}", field="square_m", hint="e.g. --square 0.025")
+    if not 0 < square_m <= MAX_SQUARE_M:
+        raise RenderError(f"square size must be 0-{MAX_SQUARE_M:g} m, got {square_m}", field="square_m",
+                          hint="e.g. --square 0.025")
     if not 1 <= views <= MAX_VIEWS:
         raise RenderError(f"views must be 1-{MAX_VIEWS}, got {views}", field="views", hint="e.g. --views 20")
 
