@@ -30,7 +30,9 @@ _THUMB_W = 192
 def coverage_maps(coverages: Mapping[str, Coverage], size: tuple[int, int]) -> str:
     """Per camera: how many views' boards cover each part of the image, axes in pixels."""
     w, h = size
-    fig, axes = plt.subplots(1, len(coverages), figsize=(4.6 * len(coverages), 3.6), squeeze=False)
+    # constrained layout keeps each colour bar's label clear of the next plot's axis label
+    fig, axes = plt.subplots(1, len(coverages), figsize=(5.2 * len(coverages), 3.8), squeeze=False,
+                             layout="constrained")
     for ax, (label, cov) in zip(axes[0], coverages.items(), strict=True):
         data = cov.footprint if cov.footprint is not None else cov.counts
         extent = (0, w, h, 0) if cov.footprint is None else (0, data.shape[1] * FOOTPRINT_CELL_PX,
@@ -49,23 +51,33 @@ def residual_vectors(corners: Mapping[str, Sequence[NDArray[np.float32]]],
                      residuals: Mapping[str, Sequence[FloatArray]], size: tuple[int, int]) -> str:
     """Per camera: every used corner with its residual (projected minus detected) as an arrow, magnified."""
     w, h = size
-    fig, axes = plt.subplots(1, len(corners), figsize=(5.2 * len(corners), 4.0), squeeze=False)
+    fig, axes = plt.subplots(1, len(corners), figsize=(5.6 * len(corners), 4.4), squeeze=False,
+                             layout="constrained")
     for ax, label in zip(axes[0], corners, strict=True):
         pts = np.vstack([c.reshape(-1, 2) for c in corners[label]]).astype(np.float64)
         res = np.vstack([r.reshape(-1, 2) for r in residuals[label]])
         norm = np.linalg.norm(res, axis=1)
         scale = 0.04 * w / max(float(np.percentile(norm, 95)), 1e-6)  # the 95th percentile arrow: 4 % of the width
-        ax.quiver(pts[:, 0], pts[:, 1], res[:, 0] * scale, res[:, 1] * scale, norm, angles="xy",
-                  scale_units="xy", scale=1, cmap="plasma", width=0.003)
+        arrows = ax.quiver(pts[:, 0], pts[:, 1], res[:, 0] * scale, res[:, 1] * scale, norm, angles="xy",
+                           scale_units="xy", scale=1, cmap="plasma", width=0.003)
+        key_px = _key_length(float(np.percentile(norm, 95)))
+        ax.quiverkey(arrows, 0.82, 1.02, key_px * scale, f"{key_px:g} px residual", labelpos="W",
+                     coordinates="axes", fontproperties={"size": 8})
         ax.set_xlim(0, w)
         ax.set_ylim(h, 0)
         ax.set_aspect("equal")
         rms = float(np.sqrt(np.mean(norm ** 2)))
-        ax.set_title(f"{label}: residuals x{scale:.0f}, all corners incl. rejected (RMS {rms:.3f} px, "
-                     f"max {float(norm.max()):.2f} px)", fontsize=9)
+        ax.set_title(f"{label}: residual arrows drawn {scale:.0f} times their length\nall corners incl. rejected: "
+                     f"RMS {rms:.3f} px, max {float(norm.max()):.2f} px", fontsize=9, loc="left")
         ax.set_xlabel("x (px)")
         ax.set_ylabel("y (px)")
     return figure_to_data_uri(fig)
+
+
+def _key_length(p95_px: float) -> float:
+    """A round residual length (pixels) near ``p95_px`` for the arrow key: 0.05, 0.1, 0.2, 0.5, 1, 2, ..."""
+    candidates = [m * 10.0 ** e for e in range(-3, 3) for m in (1.0, 2.0, 5.0)]
+    return min(candidates, key=lambda c: abs(np.log(c / max(p95_px, 1e-6))))
 
 
 def board_poses_3d(rvecs: Sequence[FloatArray], tvecs: Sequence[FloatArray], obj: NDArray[np.float32],

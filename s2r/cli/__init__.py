@@ -9,10 +9,13 @@ instead. Warnings from the library (logging) go to stderr. Output piped into a r
 from __future__ import annotations
 
 import argparse
+import difflib
 import logging
 import os
+import re
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from s2r._version import __version__
 from s2r.cli import (
@@ -32,9 +35,52 @@ EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0,
 _REPORT_HINT = "this is a bug in s2r: rerun with --debug and report the command and the traceback"
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors a newcomer can act on.
+
+    - an unknown subcommand gets "did you mean" (``calibrte`` -> ``calibrate``);
+    - a mistyped option before the subcommand (``s2r --verison``) is named, not reported as a missing COMMAND;
+    - optional positionals (``NAME:=VALUE ...``) are not listed as required.
+    """
+
+    argv: Sequence[str] = ()
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.format_usage()}{self.prog}: error: {self._explain(message)}\n")
+
+    def _explain(self, message: str) -> str:
+        choice = re.match(r"argument (\S+): invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            options = re.findall(r"'([^']*)'", choice.group(3)) or [o.strip() for o in choice.group(3).split(",")]
+            close = difflib.get_close_matches(choice.group(2), options, n=1, cutoff=0.6)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            return f"unknown {choice.group(1)} '{choice.group(2)}'{hint} (choose from {', '.join(options)})"
+        if message.startswith("the following arguments are required:"):
+            unknown = self._unknown_options()
+            if unknown:
+                return unknown
+            optional = {a.metavar or a.dest for a in self._actions if not a.option_strings and a.nargs in ("*", "?")}
+            names = [n.strip() for n in message.split(":", 1)[1].split(",")]
+            return "the following arguments are required: " + ", ".join(n for n in names if n not in optional)
+        return message
+
+    def _unknown_options(self) -> str:
+        """"unrecognized option --verison (did you mean --version?)" for options this parser does not know."""
+        known = [s for a in self._actions for s in a.option_strings]
+        for token in type(self).argv:
+            if not token.startswith("-") or token == "-":
+                continue
+            name = token.split("=", 1)[0]
+            if name in known:
+                continue
+            close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+            return f"unrecognized option {name}" + (f" (did you mean {close[0]}?)" if close else "")
+        return ""
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argparse tree of every s2r subcommand."""
-    parser = argparse.ArgumentParser(prog="s2r", description="Stereo camera profiles from sim to real.")
+    parser = _Parser(prog="s2r", description="Stereo camera profiles from sim to real.")
     parser.add_argument("--version", action="version", version=f"s2r {__version__}")
     parser.add_argument("--debug", action="store_true", help="show full tracebacks")
     parser.add_argument("-q", "--quiet", action="store_true", help="hide warnings and progress")
@@ -69,6 +115,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     This is the one error boundary of the CLI: every exception ends here as one ``error:`` line.
     """
     parser = build_parser()
+    _Parser.argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
     _configure_logging(args.quiet)
     try:

@@ -7,9 +7,10 @@ import json
 import math
 import re
 import sys
+import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 import numpy as np
 
@@ -97,16 +98,40 @@ def add_force(parser: argparse.ArgumentParser) -> None:
 
 
 class ProgressBar:
-    """A progress callback drawing ``label [#####-----] done/total`` on stderr, only on a terminal."""
+    """A progress callback for stderr: a redrawn bar on a terminal, plain log lines elsewhere.
 
-    def __init__(self, *, enabled: bool | None = None, width: int = 30) -> None:
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+    On a terminal it draws ``label [#####-----] done/total``. On anything else (a pipe, a CI log, a file) it
+    prints ``progress: label done/total (elapsed s)`` lines: when a stage starts, when it ends, and at least every
+    ``log_every_s`` seconds while one runs (a daemon heartbeat thread repeats the last state, so a slow stage
+    between two callbacks still shows it is alive). Nothing is logged in the first 3 s: a quick run (or a
+    one-line error) stays as short as it was.
+    """
+
+    def __init__(self, *, enabled: bool | None = None, terminal: bool | None = None, width: int = 30,
+                 log_every_s: float = 10.0, stream: TextIO | None = None) -> None:
+        """``enabled=False`` shows nothing (``-q``); ``terminal`` forces the bar (True) or log lines (False)."""
+        self.stream = sys.stderr if stream is None else stream
+        self.enabled = enabled is not False
+        self.terminal = self.stream.isatty() if terminal is None else terminal
         self.width = width
+        self.log_every_s = log_every_s
+        self.quiet_start_s = min(3.0, log_every_s)
         self._last = 0.0
+        self._start = time.monotonic()
+        self._state: tuple[int, int, str] | None = None
+        self._printed_at = self._start
+        self._lock = threading.Lock()
+        self._heartbeat: threading.Thread | None = None
 
     def __call__(self, done: int, total: int, label: str) -> None:
         if not self.enabled or total <= 0:
             return
+        if self.terminal:
+            self._draw(done, total, label)
+        else:
+            self._log(done, total, label)
+
+    def _draw(self, done: int, total: int, label: str) -> None:
         now = time.monotonic()
         if done < total and now - self._last < 0.1:
             return
@@ -114,5 +139,41 @@ class ProgressBar:
         filled = int(self.width * done / total)
         bar = "#" * filled + "-" * (self.width - filled)
         end = "\n" if done >= total else ""
-        sys.stderr.write(f"\r{label:<18} [{bar}] {done}/{total}{end}")
-        sys.stderr.flush()
+        self.stream.write(f"\r{label:<18} [{bar}] {done}/{total}{end}")
+        self.stream.flush()
+
+    def _log(self, done: int, total: int, label: str) -> None:
+        with self._lock:
+            previous, self._state = self._state, (done, total, label)
+            now = time.monotonic()
+            stage_changed = previous is None or previous[2] != label
+            if now - self._start < self.quiet_start_s:  # a run that ends within seconds stays silent
+                pass
+            elif stage_changed or done >= total or now - self._printed_at >= self.log_every_s:
+                self._print_state(now)
+            if self._heartbeat is None:
+                self._heartbeat = threading.Thread(target=self._beat, name="s2r-progress", daemon=True)
+                self._heartbeat.start()
+
+    def _print_state(self, now: float) -> None:
+        """Print the current state (the caller holds the lock)."""
+        if self._state is None:
+            return
+        done, total, label = self._state
+        self.stream.write(f"progress: {label} {done}/{total} ({now - self._start:.0f} s)\n")
+        self.stream.flush()
+        self._printed_at = now
+
+    def _beat(self) -> None:
+        """Repeat the last state every ``log_every_s`` while nothing else printed (ends with the process)."""
+        while True:
+            time.sleep(self.log_every_s / 4)
+            with self._lock:
+                now = time.monotonic()
+                if self._state is not None and self._state[0] < self._state[1] \
+                        and now - self._printed_at >= self.log_every_s:
+                    try:
+                        self._print_state(now)
+                    except (OSError, ValueError):  # the stream closed under us: stop quietly
+                        return
+

@@ -121,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     name = args.name or re.sub(r"[^A-Za-z0-9_.\-]", "_", out.stem) or "calibrated"
     common: dict[str, Any] = {
         "pattern": pattern, "square_m": args.square, "name": name, "distortion": args.distortion,
-        "max_error_px": args.max_error, "jobs": args.jobs, "progress": ProgressBar(),
+        "max_error_px": args.max_error, "jobs": args.jobs,
+        "progress": ProgressBar(enabled=not (args.quiet or args.json)),
         "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
     }
     result: Any

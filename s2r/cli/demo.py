@@ -205,7 +205,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"Closed-loop report: {paths.report.resolve() / 'closed_loop' / 'validation.html'}")
     verdict = "the story ended as it should" if outcome.ok else f"UNEXPECTED exit codes: {outcome.codes}"
     print(f"Demo: {verdict}.")
+    print(_next_steps())
     return 0 if outcome.ok else 1
+
+
+def _next_steps() -> str:
+    """How to run s2r yourself after the demo: the installed entry point, with or without activating."""
+    exe = Path(sys.executable).parent / "s2r"
+    shown = os.path.relpath(exe) if exe.is_relative_to(Path.cwd()) else str(exe)
+    activate = Path(shown).parent / "activate"
+    return (f"\nRun s2r yourself: {shown} --help\n"
+            f"  or once per shell: source {activate}   (then: s2r --help, python your_script.py)")
 
 
 if __name__ == "__main__":

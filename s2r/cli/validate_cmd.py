@@ -53,6 +53,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
                         help="--recording board's inner corners COLSxROWS (default 9x6)")
     parser.add_argument("--square", type=float, default=0.025, help="--recording board's square size, m (0.025)")
+    parser.add_argument("--roles-as-given", action="store_true",
+                        help="compare even when SIM is not a simulated profile or REAL is one (provenance.origin); "
+                        "e.g. two sim variants")
     add_json(parser)
     add_force(parser)
     parser.set_defaults(func=_cmd_validate)
@@ -76,6 +79,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     check_side_by_side(sim, path=args.sim)  # a vertical rig: one line now, not a confusing depth range later
     if real is not None:
         check_side_by_side(real, path=args.real)
+        if not args.roles_as_given:
+            _check_roles(sim, real, sim_path=args.sim, real_path=args.real)
     settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
     if args.distances is not None:
         try:
@@ -91,8 +96,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     if args.report:
         prepare_output_dir(args.report, force=args.force)  # fail before the work, not after
     quiet = args.quiet or args.json
+    bar = None if quiet else ProgressBar()
+    if bar is not None:
+        bar(0, 100, "validate %")  # a first line at once: in a CI log the first stage takes tens of seconds
     result = validate(sim, real, tolerances=tolerances, settings=settings, jobs=args.jobs,
-                      progress=None if quiet else ProgressBar(), recording=recording)
+                      progress=bar, recording=recording)
     if args.real is not None:  # the "write them" command names the real profile as the user did (a path works)
         result.edits = [dataclasses.replace(e, where=e.where.replace(f"export-gazebo {e.target} ",
                                                                      f"export-gazebo {shlex.quote(args.real)} ", 1))
@@ -105,6 +113,31 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         path = write_validation_report(result, args.report, force=True)
         print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
     return 0 if result.passed else 1
+
+
+_ORIGIN_WORDS = {"sim": "a simulated camera (from a robot description)", "real": "a calibrated real camera",
+                 "nominal": "a real camera's nominal profile (factory or datasheet)"}
+
+
+def _check_roles(sim: Any, real: Any, *, sim_path: str, real_path: str) -> None:
+    """Refuse SIM and REAL in each other's slots, judged by each profile's ``provenance.origin``.
+
+    A swapped call would label the real camera "sim" and advise editing the hardware towards the simulator.
+    """
+    sim_origin, real_origin = sim.provenance.origin, real.provenance.origin
+    if sim_origin == "sim" and real_origin != "sim":
+        return
+    if sim_origin != "sim" and real_origin == "sim":
+        raise ValidateError(
+            f"the roles look swapped: SIM {sim_path} is {_ORIGIN_WORDS[sim_origin]} and REAL {real_path} is "
+            f"{_ORIGIN_WORDS[real_origin]}", field="SIM REAL",
+            hint=f"give the simulated profile first: s2r validate {shlex.quote(real_path)} {shlex.quote(sim_path)}; "
+            "--roles-as-given keeps this order")
+    wrong, path, origin = ("REAL", real_path, real_origin) if sim_origin == "sim" else ("SIM", sim_path, sim_origin)
+    raise ValidateError(
+        f"{wrong} {path} is {_ORIGIN_WORDS[origin]} (provenance.origin: {origin}), as is the other profile",
+        field="SIM REAL", hint="pass a sim profile as SIM and a real one as REAL, or --roles-as-given to compare "
+        "these two anyway")
 
 
 def _recording(args: argparse.Namespace, pair: bool) -> Any:

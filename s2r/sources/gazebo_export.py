@@ -45,9 +45,11 @@ from s2r.sources.conventions import (
 )
 from s2r.sources.description import FloatArray
 
-__all__ = ["EXPORT_FORMATS", "OPTICAL_RPY", "export_gazebo", "is_realsense"]
+__all__ = ["EXPORT_FORMATS", "FY_WARN_EDGE_PX", "OPTICAL_RPY", "export_gazebo", "is_realsense", "lens_intrinsics"]
 
 EXPORT_FORMATS = ("urdf", "sdf", "gz-sim")
+#: warn about camera_info's fy = fx only past this shift at the image's top and bottom edges, pixels.
+FY_WARN_EDGE_PX = 0.1
 #: rpy of a ROS optical frame in its camera link (z forward, x right, y down).
 OPTICAL_RPY = f"{-math.pi / 2!r} 0 {-math.pi / 2!r}"
 
@@ -65,6 +67,17 @@ def _sub(parent: ET.Element, tag: str, text: str | float | int | None = None, **
     if text is not None:
         node.text = text if isinstance(text, str) else _num(text)
     return node
+
+
+def lens_intrinsics(profile: StereoProfile, cam: Camera) -> tuple[float, float, float, float, float]:
+    """``(fx, fy, cx, cy, s)`` of ``cam`` (one of ``profile``'s cameras) as ``<lens><intrinsics>`` takes them.
+
+    Both Gazebo classic and gz-sim render with these; cx, cy are in continuous pixel coordinates (OpenCV's
+    0-based principal point + 0.5), converted from the profile's own pixel convention. The one place that
+    decides what a user types into ``<lens><intrinsics>`` (export and validate's advice both use it).
+    """
+    shift = LENS_OFFSET_PX - CENTRE_OFFSET_PX.get(profile.provenance.convention, 0.0)
+    return cam.fx_px, cam.fy_px, cam.cx_px + shift, cam.cy_px + shift, cam.skew
 
 
 def is_realsense(profile: StereoProfile) -> bool:
@@ -91,9 +104,12 @@ class _Exporter:
         return f"{p.name}/{side}", "image_raw", f"{p.name}_{side}_optical_frame"
 
     def check_camera(self, side: str, cam: Camera) -> None:
-        if self.fmt != "gz-sim" and abs(cam.fx_px - cam.fy_px) > 1e-9 * cam.fx_px:
+        # camera_info's fy = fx moves a point at the top or bottom edge by this much: warn only when it shows
+        edge_px = abs(cam.fx_px - cam.fy_px) / cam.fy_px * (cam.height_px / 2.0)
+        if self.fmt != "gz-sim" and edge_px > FY_WARN_EDGE_PX:
             self.warnings.append(f"{side}: fx {cam.fx_px:.3f} != fy {cam.fy_px:.3f}: the image renders with both "
-                                 "(<lens><intrinsics>) but gazebo_ros' camera_info publishes fx for both")
+                                 "(<lens><intrinsics>) but gazebo_ros' camera_info publishes fx for both, "
+                                 f"{edge_px:.2f} px off at the top and bottom edges")
 
     def camera(self, parent: ET.Element, side: str, cam: Camera, *, name: str | None = None) -> ET.Element:
         self.check_camera(side, cam)
@@ -113,11 +129,8 @@ class _Exporter:
             _sub(noise, "mean", 0.0)
             _sub(noise, "stddev", self.noise)
         self.distortion(node, side, cam)
-        # Both simulators render with <lens><intrinsics> (cx, cy in continuous pixels: OpenCV's + 0.5)
         intr = _sub(_sub(node, "lens"), "intrinsics")
-        shift = LENS_OFFSET_PX - self.offset
-        for tag, value in (("fx", cam.fx_px), ("fy", cam.fy_px), ("cx", cam.cx_px + shift),
-                           ("cy", cam.cy_px + shift), ("s", cam.skew)):
+        for tag, value in zip(("fx", "fy", "cx", "cy", "s"), lens_intrinsics(self.profile, cam), strict=True):
             _sub(intr, tag, value)
         return node
 

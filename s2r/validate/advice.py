@@ -1,8 +1,10 @@
 """What to change: concrete edits that make the sim camera match the real one.
 
 The edits are phrased for a Gazebo camera sensor in a robot description (``<image><width>``,
-``<horizontal_fov>``, the right camera's joint ``<origin>``, ``<distortion>``), because that is where a sim
-profile comes from; ``s2r profile export-gazebo REAL`` writes the sensor XML with all of them.
+``<horizontal_fov>``, ``<lens><intrinsics>``, the right camera's joint ``<origin>``, ``<distortion>``), because
+that is where a sim profile comes from; ``s2r profile export-gazebo REAL`` writes the sensor XML with all of them.
+Every value is in the simulator's own convention and units, computed by the export's own functions, so a value
+copied from the advice equals the one the export writes.
 
 Frames: the joint origin is the pose of the right camera LINK in the left camera link (ROS link frames: x
 forward, y left, z up), derived from the real profile's OpenCV extrinsics through the optical frame
@@ -19,6 +21,7 @@ import numpy as np
 
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
 from s2r.profile import Camera, StereoProfile
+from s2r.sources.gazebo_export import lens_intrinsics
 from s2r.validate.params import ParamRow
 
 __all__ = ["Edit", "gazebo_hfov_rad", "right_joint_origin", "suggest_edits"]
@@ -68,6 +71,19 @@ def _off_centre(cam: Camera) -> float:
     return max(abs(cam.cx_px - (cam.width_px - 1) / 2.0), abs(cam.cy_px - (cam.height_px - 1) / 2.0))
 
 
+def _per_camera(profile: StereoProfile, *fields: int) -> str:
+    """``left (a, b), right (c, d) px``: fields of :func:`lens_intrinsics` (0 fx, 1 fy, 2 cx, 3 cy) per camera.
+
+    The values are what ``<lens><intrinsics>`` takes (the export's own numbers), so copying them is exact.
+    """
+    parts = []
+    for side, cam in (("left", profile.left), ("right", profile.right)):
+        lens = lens_intrinsics(profile, cam)
+        values = ", ".join(f"{lens[i]:.2f}" for i in fields)
+        parts.append(f"{side} ({values})" if len(fields) > 1 else f"{side} {values}")
+    return ", ".join(parts) + " px"
+
+
 def _intrinsic_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRow], *,
                      principal_point_px: float) -> list[Edit]:
     edits = []
@@ -80,14 +96,16 @@ def _intrinsic_edits(sim: StereoProfile, real: StereoProfile, rows: list[ParamRo
         hfov = gazebo_hfov_rad(real)
         edits.append(Edit("horizontal_fov", f"{gazebo_hfov_rad(sim):.4f} rad", f"{hfov:.4f} rad "
                           f"({math.degrees(hfov):.2f} deg)", "<horizontal_fov> in both camera sensors"))
-    if _failed(rows, "left fy", "VFOV") and abs(real.left.fy_px - real.left.fx_px) > 1e-6 * real.left.fx_px:
-        edits.append(Edit("fy", f"{sim.left.fy_px:.2f} px", f"{real.left.fy_px:.2f} px",
-                          "Gazebo classic ties fy to fx; set gz-sim <lens><intrinsics><fy>"))
-    off_centre = max(_off_centre(real.left), _off_centre(sim.left))
+    if _failed(rows, "left fy", "right fy", "VFOV") and any(
+            abs(c.fy_px - c.fx_px) > 1e-6 * c.fx_px for c in (real.left, real.right)):
+        edits.append(Edit("fy", _per_camera(sim, 1), _per_camera(real, 1),
+                          "<lens><intrinsics><fy> of each camera sensor (Gazebo classic and gz-sim render with it; "
+                          "gazebo_ros' camera_info still publishes fx for fy)"))
+    off_centre = max(_off_centre(c) for c in (real.left, real.right, sim.left, sim.right))
     if _failed(rows, "left cx", "left cy", "right cx", "right cy") and off_centre > principal_point_px:
-        edits.append(Edit("principal point", f"({sim.left.cx_px:.2f}, {sim.left.cy_px:.2f}) px",
-                          f"({real.left.cx_px:.2f}, {real.left.cy_px:.2f}) px (OpenCV 0-based)",
-                          "gz-sim <lens><intrinsics><cx>/<cy> (Gazebo classic always centres it)"))
+        edits.append(Edit("principal point", _per_camera(sim, 2, 3), _per_camera(real, 2, 3),
+                          "<lens><intrinsics><cx>/<cy> of each camera sensor, in the simulator's continuous "
+                          "pixels (OpenCV's 0-based value + 0.5), as s2r profile export-gazebo writes them"))
     if _failed(rows, "left distortion", "right distortion"):
         edits.append(Edit("distortion", sim.left.distortion.model + " " + _fmt(sim.left.distortion.coefficients),
                           real.left.distortion.model + " " + _fmt(real.left.distortion.coefficients),

@@ -32,7 +32,9 @@ class ProjectionDiff:
 
     ``shift_px`` has shape (rows, cols): the distance in pixels (real resolution) between where the sim and
     the real camera see each grid point's 3D point; ``u_px``/``v_px`` the grid's pixel columns/rows;
-    ``outside_fraction`` the share of points the sim camera sees outside its image.
+    ``outside_fraction`` the share of the points the real camera sees in its image that fall outside the sim
+    camera's image (for the right camera, points outside the real right image - the stereo pair's own
+    non-overlap - are left out: they are no sim-vs-real difference).
     """
 
     camera: str
@@ -98,6 +100,9 @@ def projection_difference(sim: StereoProfile, real: StereoProfile, *, distance_m
                           float(np.mean(_outside(sim_left, sim_px))))
     real_r = project_points(real.right, points @ real.R.T + real.T)
     sim_r = project_points(sim_right, points @ sim.R.T + sim.T)
+    # only points the REAL right camera sees count: the rest is the pair's own non-overlap, not a sim-real difference
+    real_sees = ~_outside(real.right, real_r)
+    missed = float(np.mean(_outside(sim_right, sim_r)[real_sees])) if real_sees.any() else 0.0
     right = ProjectionDiff("right", size, distance_m, u, v, np.linalg.norm(sim_r - real_r, axis=1).reshape(grid),
-                           float(np.mean(_outside(sim_right, sim_r))))
+                           missed)
     return [left, right]

@@ -109,8 +109,9 @@ def _heat_map(diff: Any) -> str:
 def _projection(result: ValidationResult) -> ReportSection:
     rows = [[d.camera, d.mean_px, d.p95_px, d.max_px, _fraction_pct(d.outside_fraction)] for d in result.projection]
     limit = result.tolerances.projection_p95_px
-    table = html_table(["camera", "mean shift (px)", "p95 shift (px)", "max shift (px)", "outside sim image (%)"],
-                       rows, row_classes=[_cls(d.p95_px <= limit) for d in result.projection],
+    table = html_table(["camera", "mean shift (px)", "p95 shift (px)", "max shift (px)",
+                        "seen by real, outside sim image (%)"], rows,
+                       row_classes=[_cls(d.p95_px <= limit) for d in result.projection],
                        caption=f"Pixel shift between where sim and real see the same point (p95 limit {limit:g} px)")
     size = result.projection[0].image_size
     text = (f"Grid over the real left image ({size[0]}x{size[1]} px); each pixel unprojected with the real camera at "

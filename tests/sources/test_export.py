@@ -223,3 +223,11 @@ def test_classic_legacy_mode_false_reads_in_scaled_units(distorted_rig: StereoPr
     b.write_text(scaled.replace("<center>", "<ignition:legacy_mode>false</ignition:legacy_mode><center>"))
     assert pytest.approx(load_description_profile(a).left.D, rel=1e-9) == load_description_profile(b).left.D
     assert pytest.approx(load_description_profile(a).right.D, rel=1e-9) == load_description_profile(b).right.D
+
+
+def test_fx_not_fy_below_a_tenth_of_a_pixel_is_not_warned(rig: StereoProfile) -> None:
+    """0.006 px between fx and fy (a calibration's noise) moves nothing visibly: no warning; 0.5 px does."""
+    for delta, warned in ((0.006, False), (0.5, True)):
+        left = rig.left.model_copy(update={"fy_px": rig.left.fx_px + delta})
+        _, warnings = export_gazebo(rig.model_copy(update={"left": left, "right": left}), fmt="urdf")
+        assert any("!= fy" in w for w in warnings) is warned

@@ -105,3 +105,14 @@ def test_baseline_difference_shows_in_the_right_camera_at_the_working_distance()
     left, right = projection_difference(sim, real, distance_m=2.0)
     assert left.max_px < 1e-9
     np.testing.assert_allclose(right.shift_px, real.left.fx_px * 0.01 / 2.0, rtol=1e-9)
+
+
+def test_the_pairs_own_non_overlap_is_not_a_sim_real_difference() -> None:
+    """A profile against itself: nothing the real cameras see falls outside the sim images, left or right.
+
+    (The right camera cannot see the real left image's left edge at 2 m; that share is the pair's non-overlap.)"""
+    rig = make_rig(baseline_m=0.3)
+    left, right = projection_difference(rig, rig)
+    assert left.outside_fraction == 0.0 and right.outside_fraction == 0.0
+    narrower = make_rig(baseline_m=0.3, hfov_rad=0.9)  # a narrower sim misses what the real one sees
+    assert projection_difference(narrower, rig)[1].outside_fraction > 0.05

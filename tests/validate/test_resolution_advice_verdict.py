@@ -50,8 +50,8 @@ def test_edits_for_the_seed_rig_against_the_realsense() -> None:
     assert edits["resolution"].target == "848x480"
     assert edits["horizontal_fov"].target.startswith("1.5708 rad")
     assert 'xyz="0 -0.05 0"' in edits["right camera joint origin"].target
-    # the real cy (235.0) lies 4.5 px above the centre of a 480-row image: Gazebo classic cannot do that
-    assert edits["principal point"].target.startswith("(422.50, 235.00)")
+    # the real cy (235.0) lies 4.5 px above the centre of a 480-row image; <lens><intrinsics> takes it + 0.5
+    assert edits["principal point"].target.startswith("left (423.00, 235.50), right (")
     centred = make_rig(width=848, height=480, hfov_rad=math.pi / 2, baseline_m=0.05)
     assert "principal point" not in {e.parameter for e in suggest_edits(
         sim, centred, parameter_table(sim, centred, Tolerances()))}
@@ -61,8 +61,34 @@ def test_edits_for_the_seed_rig_against_the_realsense() -> None:
 def test_off_centre_sim_principal_point_gets_an_edit() -> None:
     sim, real = make_rig(cx=322.5), make_rig()
     edits = {e.parameter: e for e in suggest_edits(sim, real, parameter_table(sim, real, Tolerances()))}
-    assert edits["principal point"].target.startswith("(319.50, 239.50)")
+    assert edits["principal point"].target == "left (320.00, 240.00), right (320.00, 240.00) px"
+    assert edits["principal point"].current.startswith("left (323.00, 240.00)")
     assert set(edits) == {"principal point", "sensor XML"}
+
+
+def test_advice_values_are_what_export_gazebo_writes() -> None:
+    """Every cx/cy/fy the report tells the user to type equals the export's <lens><intrinsics> (both cameras)."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    from s2r.sources.gazebo_export import export_gazebo
+
+    real = make_rig(cx=331.25, cy=228.75, origin="real")
+    left = real.left.model_copy(update={"fy_px": real.left.fx_px * 1.03})
+    right = real.right.model_copy(update={"fy_px": real.right.fx_px * 1.035, "cx_px": 327.0, "cy_px": 231.0})
+    real = real.model_copy(update={"left": left, "right": right})
+    sim = make_rig()
+    edits = {e.parameter: e for e in suggest_edits(sim, real, parameter_table(sim, real, Tolerances()))}
+    centres = [(float(a), float(b)) for a, b in re.findall(r"\(([-\d.]+), ([-\d.]+)\)",
+                                                           edits["principal point"].target)]
+    fys = [float(v) for v in re.findall(r"(?:left|right) ([-\d.]+)", edits["fy"].target)]
+    for fmt in ("urdf", "sdf", "gz-sim"):
+        xml, _ = export_gazebo(real, fmt=fmt)
+        lens = [{c.tag: float(c.text or "nan") for c in node} for node in ET.fromstring(xml).iter("intrinsics")]
+        assert len(lens) == 2, fmt
+        assert centres == [(pytest.approx(k["cx"], abs=0.005), pytest.approx(k["cy"], abs=0.005)) for k in lens]
+        assert fys == [pytest.approx(k["fy"], abs=0.005) for k in lens]
+    assert centres[0] == (331.75, 229.25)  # OpenCV's 0-based principal point + 0.5
 
 
 def test_no_edits_when_profiles_match() -> None:

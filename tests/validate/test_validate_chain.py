@@ -41,7 +41,7 @@ def pair_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str, Path]:
 
 @pytest.fixture(scope="module")
 def against_itself() -> tuple[int, dict[str, Any]]:
-    code, text = _run(["validate", SIM, SIM, "--quick", "--preset", "seed-sgbm", "--json"])
+    code, text = _run(["validate", SIM, SIM, "--quick", "--preset", "seed-sgbm", "--json", "--roles-as-given"])
     return code, json.loads(text)
 
 
