@@ -18,15 +18,9 @@ over the pattern's ``(cols, rows)`` inner corners.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import hashlib
 import json
 import math
-import multiprocessing as mp
-import os
-import signal
-import sys
-import threading
 import time
 from collections import deque
 from collections.abc import Iterable, Iterator
@@ -40,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import S2RError
+from s2r.executor import local_pool
 from s2r.fileio import atomic_write_text
 from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
@@ -257,40 +252,6 @@ class CornerCache:
             atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True)
 
 
-_PR_SET_PDEATHSIG = 1  # linux/prctl.h
-_WATCHDOG_PERIOD_S = 1.0
-
-
-def _die_with_parent(parent_pid: int) -> None:
-    """Pool initializer: end this worker when the parent process dies, even by ``kill -9``.
-
-    On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
-    thread also watches the parent pid once a second and exits when the worker was re-parented.
-    """
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent_pid:  # the parent died before the line above took effect
-        os._exit(1)
-
-    def watch() -> None:
-        while True:
-            time.sleep(_WATCHDOG_PERIOD_S)
-            if os.getppid() != parent_pid:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
-
-
-def _executor(jobs: int) -> ProcessPoolExecutor:
-    # fork: workers start instantly with cv2 loaded and never re-import the caller's __main__ (scripts
-    # without a main guard keep working); spawn where fork does not exist. Never call cv2.setNumThreads in a
-    # forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
-    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
-                               initargs=(os.getpid(),))
-
-
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,
                   cache: CornerCache | None = None, total: int | None = None,
                   progress: ProgressCallback | None = None, target: AnyTarget | None = None) -> Iterator[Detection]:
@@ -330,7 +291,7 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
             elif jobs <= 1:
                 pending.append(_detect_item(item, pattern, target))
             else:
-                pool = pool or _executor(jobs)
+                pool = pool or local_pool(jobs)
                 future = pool.submit(_detect_item, item, pattern, target)
                 future.add_done_callback(store)
                 pending.append(future)

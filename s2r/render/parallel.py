@@ -5,10 +5,11 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from typing import TypeVar
 
 from s2r.errors import RenderError
+from s2r.executor import local_pool
 from s2r.progress import ProgressCallback, report
 
 __all__ = ["resolve_jobs", "run_jobs"]
@@ -46,7 +47,7 @@ def run_jobs(
             report(progress, len(results), total, label)
         return results
     slots: list[ResultT | None] = [None] * total
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with local_pool(workers) as pool:
         futures = {pool.submit(fn, item): k for k, item in enumerate(items)}
         for done, future in enumerate(as_completed(futures), start=1):
             slots[futures[future]] = future.result()

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import logging
 import queue as queue_mod
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from multiprocessing import Manager
 from typing import Any
 
+from s2r.executor import local_pool
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.validate.depth_accuracy import measure_depth_accuracy
@@ -113,7 +114,7 @@ def run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Toleranc
             results[key] = _task(key[0], roles[key[1]], settings, tol, _Local(overall, key))
             overall.finish(key)
         return results
-    with Manager() as manager, ProcessPoolExecutor(max_workers=min(jobs, len(keys))) as pool:
+    with Manager() as manager, local_pool(min(jobs, len(keys))) as pool:
         channel = manager.Queue()
         futures: dict[Future[Any], TaskKey] = {
             pool.submit(_task, kind, roles[role], settings, tol, _Forward(channel, (kind, role))): (kind, role)

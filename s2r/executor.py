@@ -1,0 +1,158 @@
+"""The one executor seam for s2r's parallel work: local processes by default, Dask distributed on request.
+
+Every stage that runs work in parallel (corner detection, validate's renders, fleet checks) takes its pool
+from here, so a new backend is added once:
+
+- :func:`local_pool`: a ``concurrent.futures.ProcessPoolExecutor`` whose workers start by ``fork`` where it
+  exists (instant, cv2 already loaded, the caller's ``__main__`` never re-imported) and die with their parent,
+  even when the parent is killed with ``kill -9``;
+- :func:`open_runner`: a :class:`TaskRunner` over either that pool or a Dask ``distributed.Client`` (an
+  existing scheduler at ``tcp://host:8786``, or a local cluster of worker processes started for the run).
+  ``distributed`` is imported only when Dask is asked for.
+
+Tasks must be module-level functions with picklable arguments and results.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import multiprocessing as mp
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import as_completed as futures_completed
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+from s2r.errors import S2RError
+
+__all__ = ["TaskOutcome", "TaskRunner", "local_pool", "open_runner"]
+
+ItemT = TypeVar("ItemT")
+ResultT = TypeVar("ResultT")
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+_WATCHDOG_PERIOD_S = 1.0
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Pool initializer: end this worker when the parent process dies, even by ``kill -9``.
+
+    On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
+    thread also watches the parent pid once a second and exits when the worker was re-parented.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent_pid:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(_WATCHDOG_PERIOD_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
+
+
+def local_pool(jobs: int) -> ProcessPoolExecutor:
+    """A process pool of ``jobs`` workers that die with this process.
+
+    fork: workers start instantly with cv2 loaded and never re-import the caller's ``__main__`` (scripts
+    without a main guard keep working); spawn where fork does not exist. Never call ``cv2.setNumThreads`` in a
+    forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
+    """
+    if jobs < 1:
+        raise S2RError(f"must be at least 1, got {jobs}", field="jobs", hint="e.g. 2")
+    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
+                               initargs=(os.getpid(),))
+
+
+@dataclass(frozen=True)
+class TaskOutcome(Generic[ItemT, ResultT]):
+    """One finished task: its input, its result, or the exception it raised (then ``result`` is None)."""
+
+    index: int
+    item: ItemT
+    result: ResultT | None
+    error: BaseException | None
+
+
+class TaskRunner:
+    """Runs ``fn(item)`` for many items on the chosen backend; outcomes arrive as tasks finish.
+
+    A task that raises does not stop the others: its exception comes back in its :class:`TaskOutcome`.
+    """
+
+    def __init__(self, backend: Any, *, kind: str, workers: int) -> None:
+        self._backend = backend
+        self.kind = kind  # "local", "dask-local" or "dask"
+        self.workers = workers
+
+    def as_completed(self, fn: Callable[[ItemT], ResultT], items: Sequence[ItemT]
+                     ) -> Iterator[TaskOutcome[ItemT, ResultT]]:
+        """Submit every item, then yield outcomes in completion order."""
+        if self.kind == "local":
+            futures = {self._backend.submit(fn, item): k for k, item in enumerate(items)}
+            done: Iterator[Any] = futures_completed(futures)
+        else:
+            from distributed import as_completed as dask_completed
+
+            futures = {self._backend.submit(fn, item, pure=False): k for k, item in enumerate(items)}
+            done = iter(dask_completed(list(futures)))  # type: ignore[no-untyped-call]
+        for future in done:
+            k = futures[future]
+            try:
+                yield TaskOutcome(k, items[k], future.result(), None)
+            except Exception as exc:  # a task's own failure is data for the caller, not the end of the run
+                yield TaskOutcome(k, items[k], None, exc)
+
+
+@contextlib.contextmanager
+def open_runner(*, workers: int, scheduler: str | None = None, dask: bool = False) -> Iterator[TaskRunner]:
+    """A :class:`TaskRunner` for the run, shut down on exit.
+
+    Args:
+        workers: worker processes of a local pool or of a local Dask cluster (ignored with ``scheduler``).
+        scheduler: address of a running Dask scheduler (``tcp://host:8786``); implies Dask.
+        dask: use Dask even without a scheduler: a ``LocalCluster`` of ``workers`` single-threaded processes.
+    """
+    if workers < 1:
+        raise S2RError(f"must be at least 1, got {workers}", field="--workers", hint="e.g. 2")
+    if scheduler is None and not dask:
+        with local_pool(workers) as pool:
+            yield TaskRunner(pool, kind="local", workers=workers)
+        return
+    client, cluster = _dask_client(workers=workers, scheduler=scheduler)
+    try:
+        yield TaskRunner(client, kind="dask" if scheduler else "dask-local", workers=workers)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _dask_client(*, workers: int, scheduler: str | None) -> tuple[Any, Any]:
+    """``(Client, LocalCluster or None)``; S2RError naming --scheduler when it cannot be reached."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise S2RError("Dask's distributed is not installed", field="--scheduler",
+                       hint="pip install 'distributed' (make installs it)") from None
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout="10s"), None  # type: ignore[no-untyped-call]
+        except (OSError, TimeoutError) as exc:
+            raise S2RError(f"cannot reach the Dask scheduler: {exc}", path=scheduler, field="--scheduler",
+                           hint="start one (dask scheduler) or drop --scheduler for a local cluster") from None
+    cluster = LocalCluster(  # type: ignore[no-untyped-call]
+        n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        silence_logs=40)
+    return Client(cluster), cluster  # type: ignore[no-untyped-call]
