@@ -10,6 +10,7 @@ from pathlib import Path
 
 __all__ = [
     "CalibrationError",
+    "CheckError",
     "DepthError",
     "FormatError",
     "OutputExistsError",
@@ -80,6 +81,10 @@ class DepthError(S2RError):
 
 class ValidateError(S2RError):
     """A validation request is malformed (tolerances, distances, report folder)."""
+
+
+class CheckError(S2RError):
+    """A target-less drift check (``s2r check``, ``s2r fleet check``) got unusable inputs."""
 
 
 class OutputExistsError(S2RError):

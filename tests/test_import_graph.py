@@ -18,12 +18,12 @@ LAYERS: dict[str, int] = {
     "formats": 4, "sources": 4,
     "registry": 5, "htmlreport": 5,
     "calib": 6, "depth": 6, "render": 6,
-    "compat": 7, "quality": 7,
+    "compat": 7, "quality": 7, "drift": 7,
     "validate": 8,
     "cli": 9, "__main__": 10, "__init__": 10,
 }
 CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
-             "quality"}
+             "quality", "drift"}
 PYBULLET_HOMES = {"render"}
 
 

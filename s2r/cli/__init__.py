@@ -20,6 +20,7 @@ from typing import NoReturn
 from s2r._version import __version__
 from s2r.cli import (
     calibrate_cmd,
+    check_cmd,
     depth_cmd,
     depth_quality_cmd,
     profile_cmd,
@@ -92,6 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
     depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
+    check_cmd.register(sub)
     return parser
 
 

@@ -1,0 +1,190 @@
+"""``s2r check`` and ``s2r fleet check``: is a stereo calibration still right, from ordinary recordings.
+
+Exit codes: 0 good (every robot good), 1 drifted or cannot tell (any robot not good, or failed), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from s2r.cli._common import ProgressBar, add_force, add_json, load_profile, print_json, to_jsonable
+from s2r.errors import CheckError
+
+__all__ = ["register"]
+
+
+def _add_settings(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--tolerance", type=float, default=0.05, metavar="DEG",
+                        help="rotation drift tolerated per axis, degrees (default 0.05)")
+    parser.add_argument("--max-frames", type=int, default=20, metavar="N",
+                        help="pairs used, spread over the recording (default 20)")
+
+
+def register(sub: Any) -> None:
+    """Add ``check`` and ``fleet check``."""
+    p = sub.add_parser(
+        "check", help="is a stereo calibration still right? (no target: ordinary scenes)",
+        description="Rectify ordinary stereo pairs with the profile, match features, and fit the relative-rotation "
+        "error that explains their vertical disparity. Verdict good / drifted / cannot tell; --fix writes the "
+        "profile with the rotation re-estimated. Exit 0 good, 1 drifted or cannot tell, 2 bad input.")
+    p.add_argument("profile", help="profile name or path")
+    p.add_argument("recording", nargs="?", type=Path, help="folder of pairs (left/ + right/, or leftNN/rightNN)")
+    p.add_argument("--left", metavar="GLOB", help="left images glob (with --right) instead of a folder")
+    p.add_argument("--right", metavar="GLOB", help="right images glob")
+    p.add_argument("--bag", type=Path, help="ROS 1 .bag or ROS 2 bag folder instead of a folder")
+    p.add_argument("--left-topic", help="--bag: left image topic")
+    p.add_argument("--right-topic", help="--bag: right image topic")
+    _add_settings(p)
+    p.add_argument("--report", type=Path, metavar="DIR", help="write DIR/check.html")
+    p.add_argument("--fix", action="store_true", help="write the corrected profile to -o")
+    p.add_argument("-o", "--output", type=Path, help="--fix: corrected profile YAML to write")
+    add_json(p)
+    add_force(p)
+    p.set_defaults(func=_cmd_check)
+    fleet = sub.add_parser("fleet", help="drift checks of many robots on Dask",
+                           description="Run s2r check for every robot of a fleet file.")
+    fleet_sub = fleet.add_subparsers(dest="fleet_action", required=True, metavar="ACTION")
+    fc = fleet_sub.add_parser(
+        "check", help="check every robot of FLEET.yaml, one Dask task each",
+        description="Each robot (name, profile, recording) is one task on Dask's distributed scheduler: a local "
+        "cluster of --workers processes, or --scheduler tcp://host:8786. Writes DIR/index.html, DIR/summary.json "
+        "and DIR/NAME/check.html. Exit 0 every robot good, 1 any not good, 2 FLEET.yaml is bad input.")
+    fc.add_argument("fleet_file", type=Path, metavar="FLEET.yaml")
+    fc.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="output folder")
+    fc.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: a local cluster)")
+    fc.add_argument("--workers", type=int, default=2, help="local cluster worker processes (default 2)")
+    _add_settings(fc)
+    add_json(fc)
+    add_force(fc)
+    fc.set_defaults(func=_cmd_fleet)
+
+
+def _settings(args: argparse.Namespace) -> Any:
+    from s2r.drift.check import CheckSettings
+
+    if not 0.0 < args.tolerance <= 10.0:  # NaN fails too
+        raise CheckError(f"must be between 0 and 10 degrees, got {args.tolerance}", field="--tolerance",
+                         hint="e.g. 0.05")
+    if args.max_frames < 1:
+        raise CheckError(f"must be at least 1, got {args.max_frames}", field="--max-frames", hint="e.g. 20")
+    return CheckSettings(tolerance_deg=(args.tolerance,) * 3)
+
+
+def _source(args: argparse.Namespace) -> Any:
+    from s2r.drift.source import StereoSource
+
+    given = [x is not None for x in (args.recording, args.left or args.right, args.bag)]
+    if sum(given) != 1:
+        raise CheckError("give one recording: a FOLDER, --left/--right globs, or --bag", field="RECORDING",
+                         hint="e.g. s2r check real.yaml logs/run1/")
+    return StereoSource(folder=args.recording, left_glob=args.left, right_glob=args.right, bag=args.bag,
+                        left_topic=args.left_topic, right_topic=args.right_topic, max_frames=args.max_frames)
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from s2r.drift.check import check_drift
+    from s2r.drift.source import read_pairs
+    from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
+
+    if args.fix != (args.output is not None):
+        raise CheckError("--fix and -o go together", field="--fix", hint="pass --fix -o corrected.yaml")
+    settings, source = _settings(args), _source(args)
+    profile = load_profile(args.profile)
+    if args.output is not None:
+        check_output_free(args.output, force=args.force)
+    if args.report is not None:
+        prepare_output_dir(args.report, force=args.force)
+    bar = ProgressBar(enabled=not (args.quiet or args.json))
+    result = check_drift(profile, read_pairs(source), settings=settings, progress=bar, total=source.max_frames)
+    if args.json:
+        print_json(result.as_dict())
+    else:
+        print("\n".join(_summary(result)))
+    if args.report is not None:
+        from s2r.drift.report import check_report_html
+
+        path = atomic_write_text(args.report / "check.html", check_report_html(result, source=source.describe()),
+                                 force=True)
+        print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
+    if args.fix:
+        _write_fix(args, profile, result, source.describe())
+    return 0 if result.verdict == "good" else 1
+
+
+def _write_fix(args: argparse.Namespace, profile: Any, result: Any, source: str) -> None:
+    from s2r.drift.fix import corrected_profile
+    from s2r.formats.s2r_yaml import dump_profile
+
+    if result.verdict == "cannot tell":
+        raise CheckError("no correction written: the check cannot tell the rotation", field="--fix",
+                         hint="; ".join(result.reasons))
+    dump_profile(corrected_profile(profile, result, source=source), args.output, force=args.force)
+    print(f"wrote {args.output}: rotation corrected, intrinsics and baseline kept",
+          file=sys.stderr if args.json else sys.stdout)
+
+
+def _summary(result: Any) -> list[str]:
+    from s2r.drift.check import AXES, BLIND_SPOTS
+
+    lines = [f"{result.profile}: {result.verdict.upper()} - {'; '.join(result.reasons)}",
+             f"  {result.matches} matches in {len(result.frames)} frames, robust residual {result.residual_px:.3f} px",
+             "  rotation error of the right camera (deg, about its optical axes; R_true = dR R_profile):"]
+    lines += [f"    {a:<6}{o:+.4f} +/- {s:.4f}  (tolerance {t:g})" for a, o, s, t in
+              zip(AXES, result.omega_deg, result.sigma_deg, result.tolerance_deg, strict=True)]
+    v = result.vertical_px
+    lines.append(f"  rows of mismatch it leaves: median {v['median']:.2f} px, p95 {v['p95']:.2f} px")
+    lines.append("  depth bias at the centre (from yaw): " + ", ".join(
+        f"{c['depth_error_pct']:+.2f} +/- {c['depth_error_sigma_pct']:.2f} % at {c['distance_m']:g} m"
+        for c in result.depth_cost))
+    lines.append(f"  {BLIND_SPOTS}")
+    return lines
+
+
+def _cmd_fleet(args: argparse.Namespace) -> int:
+    from s2r.drift.fleet import load_fleet, run_fleet
+    from s2r.fileio import check_output_dir
+
+    settings = _settings(args)
+    if args.workers < 1:
+        raise CheckError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
+    check_output_dir(args.output, force=args.force)
+    bar = ProgressBar(enabled=not (args.quiet or args.json))
+    rows = run_fleet(jobs, workers=args.workers, scheduler=args.scheduler, progress=bar)
+    _write_fleet(args, rows)
+    summary = [{k: v for k, v in r.items() if k not in ("html",)} for r in rows]
+    if args.json:
+        print_json({"robots": summary, "counts": _counts(rows), "output": str(args.output)})
+    else:
+        for r in rows:
+            print(f"{r['verdict'].upper():<12} {r['name']:<20} {'; '.join(r['reasons'])}")
+        print(f"{len(rows)} robots: " + ", ".join(f"{n} {v}" for v, n in _counts(rows).items() if n))
+    return 0 if all(r["verdict"] == "good" for r in rows) else 1
+
+
+def _counts(rows: list[dict[str, Any]]) -> dict[str, int]:
+    from s2r.drift.fleet import SEVERITY
+
+    return {v: sum(r["verdict"] == v for r in rows) for v in SEVERITY}
+
+
+def _write_fleet(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
+    """DIR/index.html, DIR/summary.json and each robot's DIR/NAME/check.html + check.json."""
+    from s2r.drift.report import fleet_report_html
+    from s2r.fileio import atomic_write_text, prepare_output_dir
+
+    out = prepare_output_dir(args.output, force=args.force)
+    for r in rows:
+        data = {k: v for k, v in r.items() if k != "html"}
+        folder = prepare_output_dir(out / r["name"], force=True)
+        if r.get("html"):
+            atomic_write_text(folder / "check.html", r["html"], force=args.force)
+            r["report"] = f"{r['name']}/check.html"
+        atomic_write_text(folder / "check.json", json.dumps(to_jsonable(data), indent=2), force=args.force)
+    summary = {"robots": [{k: v for k, v in r.items() if k != "html"} for r in rows], "counts": _counts(rows)}
+    atomic_write_text(out / "summary.json", json.dumps(to_jsonable(summary), indent=2), force=args.force)
+    atomic_write_text(out / "index.html", fleet_report_html(rows, fleet_file=args.fleet_file), force=args.force)
