@@ -56,6 +56,7 @@ def test_a_bad_fleet_file_is_bad_input(capsys: pytest.CaptureFixture[str], tmp_p
     assert main(["fleet", "check", str(path), "-o", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"error: {path}: robots[0]") and "recording" in err
-    path.write_text("robots:\n  - {name: a, profile: p.yaml, recording: r}\n  - {name: a, profile: p.yaml, recording: r}\n")
+    entry = "  - {name: a, profile: p.yaml, recording: r}\n"
+    path.write_text("robots:\n" + entry + entry)
     assert main(["fleet", "check", str(path), "-o", str(tmp_path / "o")]) == 2
     assert "repeated name" in capsys.readouterr().err
