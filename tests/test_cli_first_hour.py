@@ -69,3 +69,11 @@ def test_progress_stays_silent_for_a_quick_run_and_when_disabled() -> None:
 def test_demo_ends_with_a_command_that_runs_s2r() -> None:
     text = _next_steps()
     assert "s2r --help" in text and "activate" in text
+
+
+def test_quiet_and_debug_work_after_the_subcommand_too(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["profile", "show", "gazebo_dual_camera", "-q"]) == 0
+    assert main(["validate", "no_such_rig", "-q"]) == 2
+    assert capsys.readouterr().err.startswith("error: ")
+    with pytest.raises(Exception, match="no_such_rig"):
+        main(["validate", "no_such_rig", "--debug"])

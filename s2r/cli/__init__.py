@@ -94,7 +94,21 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
     check_cmd.register(sub)
+    _accept_global_options_anywhere(parser)
     return parser
+
+
+def _accept_global_options_anywhere(parser: argparse.ArgumentParser) -> None:
+    """``s2r calibrate ... -q`` works as ``s2r -q calibrate ...``: every subcommand also takes -q and --debug
+    (default SUPPRESS, so a subcommand without them keeps the value given before it)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in set(action.choices.values()):
+                child.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                                   help="hide warnings and progress")
+                child.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                                   help="show full tracebacks")
+                _accept_global_options_anywhere(child)
 
 
 class _WarningFormatter(logging.Formatter):
