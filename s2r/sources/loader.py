@@ -14,12 +14,12 @@ from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
-from s2r.sources.sdf_include import resolve_includes
+from s2r.sources.sdf_include import expand_includes
 from s2r.sources.urdf import parse_urdf
 from s2r.sources.xacro_expand import expand_xacro, is_xacro
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["StereoPair", "load_description", "optical_pose", "select_pair", "stereo_pair"]
+__all__ = ["StereoPair", "check_skipped_includes", "load_description", "optical_pose", "select_pair", "stereo_pair"]
 
 logger = logging.getLogger(__name__)
 _NO_CAMERA_HINT = ("add a <sensor type='camera'> inside <gazebo reference='LINK'> (URDF) or inside a <link> (SDF)")
@@ -55,8 +55,9 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         _check_legacy_macro_calls(doc, text)
         description = parse_urdf(doc)
     elif doc.root.tag in ("sdf", "model", "world"):
-        resolve_includes(doc, source.parent, package_paths)
+        included, skipped = expand_includes(doc, package_paths)
         description = parse_sdf(doc)
+        description.included_files, description.skipped_includes = included, skipped
     else:
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
                           hint="expected a URDF <robot> or an <sdf> document")
@@ -166,8 +167,32 @@ def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpe
     return invert_transform(optical_pose(left)) @ T_links @ optical_pose(right)
 
 
+def check_skipped_includes(description: Description, *, left: str | None = None, right: str | None = None) -> None:
+    """Skip (with a note) the includes that named nothing here when they cannot hold a camera asked for: a
+    standard camera-less model (``model://sun``, ``ground_plane``), or any model when ``left`` and ``right`` both
+    name cameras defined inline. Otherwise the first such include is the error.
+
+    Raises:
+        SourceError: an include that names nothing here and might hold a camera asked for.
+    """
+    named_inline = left is not None and right is not None and all(
+        any(c.matches(q) for c in description.cameras) for q in (left, right))
+    for skipped in description.skipped_includes:
+        if not (skipped.cameraless or named_inline):
+            raise skipped.error()
+    for skipped in description.skipped_includes:
+        why = "a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
+        note = f"skipped <include> {skipped.uri} ({skipped.field}): not available here, {why}"
+        logger.warning("%s: note: %s", description.path, note)
+        if note not in description.notes:
+            description.notes.append(note)
+
+
 def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None) -> StereoPair:
-    """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path."""
+    """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path.
+
+    Includes that named nothing here are skipped or refused first (:func:`check_skipped_includes`)."""
+    check_skipped_includes(description, left=left, right=right)
     cam_left, cam_right = select_pair(description, left=left, right=right)
     tree = KinematicTree(description)
     _, movable = tree.transform(cam_left.link, cam_right.link)

@@ -188,8 +188,10 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
     """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
     source = description.path
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
-    notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
-             f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
+    notes = "; ".join([f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from "
+                       f"horizontal_fov in the {convention} convention" + (f"; xacro args {args}" if args else ""),
+                       *description.notes])
+    sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in [source, *description.included_files])
     try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
         left_cam = _camera(pair.left, convention)
         right_cam = _camera(pair.right, convention)
@@ -203,9 +205,7 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
             matcher=seed_matcher(left_cam.fx_px, baseline, left_cam.width_px, far_limit_m=simulation.clip_far_m),
             simulation=simulation,
             provenance=Provenance(origin="sim", method=f"s2r profile from-urdf ({description.kind})",
-                                  convention=convention, sources=(SourceFile(path=str(source),
-                                                                             sha256=sha256_file(source)),),
-                                  notes=notes),
+                                  convention=convention, sources=sources, notes=notes),
         )
     except ValidationError as exc:
         first = exc.errors()[0]
