@@ -267,20 +267,20 @@ def _profile_rule(report: _Report, description: Description, pair: Any) -> None:
 
 def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: Mapping[str, str] | None = None,
                      package_paths: Sequence[Path] = (), left: str | None = None,
-                     right: str | None = None) -> list[Finding]:
+                     right: str | None = None, env: Mapping[str, str] | None = None) -> list[Finding]:
     """Lint a URDF / xacro / SDF stereo rig (and optionally a published camera_info against it).
 
     Args:
         path: the description file.
         camera_info: an object with ``width``, ``height``, ``K`` (3x3, pixels) and optionally ``P`` (3x4)
             and ``camera_name`` (as :func:`s2r.formats.ros.read_camera_info` returns).
-        xacro_args, package_paths: as for :func:`s2r.sources.load_description_profile`.
+        xacro_args, package_paths, env: as for :func:`s2r.sources.load_description_profile`.
         left, right: camera names when the pair is not unambiguous.
 
     Returns:
         Findings, errors first. Unreadable input raises :class:`~s2r.errors.SourceError` instead.
     """
-    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths)
+    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths, env=env)
     pair = stereo_pair(description, left=left, right=right)
     report = _Report(description)
     for joint in pair.movable_joints:

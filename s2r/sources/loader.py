@@ -36,12 +36,13 @@ class StereoPair:
 
 
 def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None = None,
-                     package_paths: Sequence[Path] = ()) -> Description:
+                     package_paths: Sequence[Path] = (), env: Mapping[str, str] | None = None) -> Description:
     """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
 
     A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
     ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
-    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`).
+    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`). ``env`` is what xacro's ``$(env)`` / ``$(optenv)`` see
+    (``--env NAME=VALUE``); the machine's environment is never read for them.
 
     Raises:
         SourceError: missing file, xacro failure, malformed XML, unknown root element, missing links.
@@ -49,7 +50,8 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     source = Path(path)
     text = read_text_file(source, error=SourceError)
     uses_xacro = is_xacro(source) or "xmlns:xacro" in text or "<xacro:" in text  # .gazebo, .xacro.sdf, ...
-    expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if uses_xacro else text
+    expanded = (expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths, env=env) if uses_xacro
+                else text)
     doc = parse_xml(expanded, source)
     if doc.root.tag == "robot":
         _check_legacy_macro_calls(doc, text)
@@ -126,6 +128,13 @@ def select_pair(description: Description, *, left: str | None = None,
             raise SourceError("no camera sensor found: <sensor:camera> is the Gazebo 0.x (pre-SDF, ROS diamondback) "
                               "format, which no current Gazebo reads", path=description.path, field="<sensor:camera>",
                               hint="describe the cameras as SDF <sensor type='camera'> (Gazebo classic or gz-sim)")
+        switches = sorted(set(re.findall(r"\$\((?:opt)?env\s+([A-Za-z_][A-Za-z0-9_]*)", description.source_text or "")))
+        if switches:  # Clearpath: payloads are switched on by environment variables s2r does not read
+            shown = ", ".join(switches[:6]) + (", ..." if len(switches) > 6 else "")
+            raise SourceError("no camera sensor found", path=description.path, field="<sensor>",
+                              hint=f"this description reads environment variables ({shown}) that s2r does not take "
+                              "from the machine: pass the ones that switch the cameras on with --env NAME=VALUE "
+                              f"(e.g. --env {switches[0]}=1)")
         raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)
     if left is not None and right is not None:
         pair = (_pick(description, left, "--left"), _pick(description, right, "--right"))

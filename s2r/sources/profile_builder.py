@@ -138,7 +138,7 @@ def _extrinsics(pair: StereoPair, path: Path) -> Extrinsics:
 def load_description_profile(
     path: str | Path, *, convention: str = "gazebo-classic", left: str | None = None, right: str | None = None,
     xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (), name: str | None = None,
-    allow_bad_baseline: bool = False,
+    allow_bad_baseline: bool = False, env: Mapping[str, str] | None = None,
 ) -> StereoProfile:
     """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors.
 
@@ -151,6 +151,8 @@ def load_description_profile(
         name: profile name (default: the file name up to its first dot).
         allow_bad_baseline: write a pair that ``s2r lint`` calls an error (baseline along the optical axis,
             right camera on the left) with a warning instead of refusing it.
+        env: the values xacro's ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``, e.g.
+            Clearpath's ``JACKAL_BB2=1``); the machine's environment is never read. Recorded in the provenance.
 
     The optical axes come from the composed sensor poses (Gazebo renders along the camera frame's +x),
     never from link names. The pair's geometry follows the same rule as ``s2r lint``
@@ -162,10 +164,10 @@ def load_description_profile(
     """
     source = Path(path)
     check_convention(convention)
-    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths)
+    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths, env=env)
     pair = stereo_pair(description, left=left, right=right)
     _check_geometry(description, pair, allow=allow_bad_baseline)
-    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args)
+    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args, env=env)
 
 
 def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
@@ -184,13 +186,15 @@ def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) 
 
 
 def profile_from_pair(description: Description, pair: StereoPair, *, convention: str = "gazebo-classic",
-                      name: str | None = None, xacro_args: Mapping[str, str] | None = None) -> StereoProfile:
+                      name: str | None = None, xacro_args: Mapping[str, str] | None = None,
+                      env: Mapping[str, str] | None = None) -> StereoProfile:
     """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
     source = description.path
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
+    passed = " ".join(f"{k}={v}" for k, v in sorted((env or {}).items()))
     notes = "; ".join([f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from "
-                       f"horizontal_fov in the {convention} convention" + (f"; xacro args {args}" if args else ""),
-                       *description.notes])
+                       f"horizontal_fov in the {convention} convention" + (f"; xacro args {args}" if args else "")
+                       + (f"; --env {passed}" if passed else ""), *description.notes])
     sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in [source, *description.included_files])
     try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
         left_cam = _camera(pair.left, convention)

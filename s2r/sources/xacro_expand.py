@@ -119,7 +119,7 @@ def _root_cause(exc: BaseException) -> BaseException:
 
 def expand_xacro(
     path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (),
-    limits: Limits | None = None,
+    limits: Limits | None = None, env: Mapping[str, str] | None = None,
 ) -> str:
     """Expand the xacro file ``path`` to URDF/SDF XML text, in a child process under ``limits``.
 
@@ -128,6 +128,8 @@ def expand_xacro(
         xacro_args: ``<xacro:arg>`` values, as ``name:=value`` on the xacro command line.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
         limits: CPU, memory and wall-clock limits of the expansion (default :class:`Limits`).
+        env: what ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``); the machine's own
+            environment is never read.
 
     Raises:
         SourceError: unresolved ``$(find)``, an undefined argument, a refused expression, a limit overrun,
@@ -135,16 +137,18 @@ def expand_xacro(
     """
     mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
     paths = tuple(Path(p) for p in package_paths)
-    return run_limited(lambda: _expand_here(Path(path), mappings, paths), path=Path(path),
+    values = {str(k): str(v) for k, v in (env or {}).items()}
+    return run_limited(lambda: _expand_here(Path(path), mappings, paths, values), path=Path(path),
                        what="xacro expansion", limits=limits or Limits())
 
 
-def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[Path]) -> str:
+def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[Path],
+                 env: Mapping[str, str] | None = None) -> str:
     """:func:`expand_xacro` in this process (the sandbox applies; no resource limits)."""
     import xacro
 
     try:
-        with _find_resolver(package_paths), sandbox(Path(path), package_paths), _quiet_xacro():
+        with _find_resolver(package_paths), sandbox(Path(path), package_paths, env=env), _quiet_xacro():
             doc = xacro.process_file(str(Path(path).resolve()), mappings=mappings)
     except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
         cause = _root_cause(exc)

@@ -24,9 +24,10 @@ a profile, so while s2r expands a xacro (:func:`sandbox`):
   package, the nearest folder above holding a ``package.xml``) and the package folders (``--package-path``,
   ``ROS_PACKAGE_PATH``);
 - a file (the description or an include) holding ``<!DOCTYPE`` is refused: no entity expansion;
-- ``$(env NAME)`` and ``$(optenv NAME default)`` never read the environment: ``env`` is refused (pass the
-  value as ``NAME:=value``), ``optenv`` takes its default. A profile thus depends on the files and the
-  arguments given, not on the machine's environment, and no environment value reaches an output.
+- ``$(env NAME)`` and ``$(optenv NAME default)`` never read the machine's environment. They see only the values
+  passed explicitly (``--env NAME=VALUE``: Clearpath robots switch accessories on with ``JACKAL_BB2=1``):
+  ``env`` of a name not passed is refused, ``optenv`` of one takes its default. A profile thus depends on the
+  files and the values given, not on the machine's environment, and no other environment value reaches an output.
 """
 
 from __future__ import annotations
@@ -230,18 +231,29 @@ def _patched(obj: Any, name: str, value: Any) -> Iterator[None]:
             setattr(obj, name, saved)
 
 
-def _refuse_env(name: str) -> str:
-    raise UnsafeXacro(f"$(env {name}) is refused: s2r does not read the environment while expanding xacro "
-                      f"(pass the value as {name}:=value, or use $(arg {name}))")
+def _env_lookups(env: Mapping[str, str]) -> tuple[Callable[[str], str], Callable[..., str]]:
+    """``$(env NAME)`` and ``$(optenv NAME default)`` answered from ``env`` (the ``--env`` values) only."""
 
+    def env_value(name: str) -> str:
+        if name in env:
+            return env[name]
+        raise UnsafeXacro(f"$(env {name}) is refused: s2r does not read the environment while expanding xacro, "
+                          f"only --env values (pass --env {name}=VALUE)")
 
-def _optenv_default(name: str, default: str = "") -> str:
-    return default
+    def optenv_value(name: str, default: str = "") -> str:
+        return env.get(name, default)
+
+    return env_value, optenv_value
 
 
 @contextmanager
-def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
-    """Expand xacro within this block under the rules of the module docstring (patches the ``xacro`` module)."""
+def sandbox(description: Path, package_paths: Sequence[Path], *, env: Mapping[str, str] | None = None
+            ) -> Iterator[None]:
+    """Expand xacro within this block under the rules of the module docstring (patches the ``xacro`` module).
+
+    ``env``: the values ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``); nothing else.
+    """
+    env_value, optenv_value = _env_lookups(dict(env or {}))
     import xacro
     from xacro import substitution_args as subst
 
@@ -278,8 +290,8 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
             (xacro, "safe_eval", checked_eval), (subst, "_eval", checked_subst_eval),
             (xacro, "get_include_files", checked_includes),
             (symbols, "load_yaml", checked_load_yaml), (symbols["xacro"], "load_yaml", checked_load_yaml),
-            (subst, "_eval_env", _refuse_env), (subst, "_eval_optenv", _optenv_default),
-            (subst._eval_dict, "env", _refuse_env), (subst._eval_dict, "optenv", _optenv_default),
+            (subst, "_eval_env", env_value), (subst, "_eval_optenv", optenv_value),
+            (subst._eval_dict, "env", env_value), (subst._eval_dict, "optenv", optenv_value),
         ):
             stack.enter_context(_patched(obj, name, value))
         allowed.extend(allowed_functions(symbols))
