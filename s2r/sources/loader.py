@@ -16,7 +16,7 @@ from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
 from s2r.sources.sdf_include import expand_includes
 from s2r.sources.urdf import parse_urdf
-from s2r.sources.xacro_expand import expand_xacro, is_xacro
+from s2r.sources.xacro_expand import XacroExpansion, expand_xacro_files, is_xacro
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["StereoPair", "check_skipped_includes", "load_description", "optical_pose", "select_pair", "stereo_pair"]
@@ -50,11 +50,12 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     source = Path(path)
     text = read_text_file(source, error=SourceError)
     uses_xacro = is_xacro(source) or "xmlns:xacro" in text or "<xacro:" in text  # .gazebo, .xacro.sdf, ...
-    expanded = (expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths, env=env) if uses_xacro
-                else text)
+    expansion = (expand_xacro_files(source, xacro_args=xacro_args, package_paths=package_paths, env=env)
+                 if uses_xacro else XacroExpansion(text))
+    expanded = expansion.text
     doc = parse_xml(expanded, source)
     if doc.root.tag == "robot":
-        _check_legacy_macro_calls(doc, text)
+        _check_legacy_macro_calls(doc, text, expansion)
         description = parse_urdf(doc)
     elif doc.root.tag in ("sdf", "model", "world"):
         included, skipped = expand_includes(doc, package_paths)
@@ -72,9 +73,20 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
 _URDF_CHILDREN = frozenset({"link", "joint", "gazebo", "transmission", "material", "ros2_control", "sensor"})
 
 
-def _check_legacy_macro_calls(doc: XmlDoc, source_text: str) -> None:
-    """xacro 2 leaves a macro call without the ``xacro:`` prefix (legacy ROS 1 syntax) as a plain element: name it."""
-    macros = set(re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)[\"']", source_text))
+def _legacy_call_site(tag: str, source: Path, source_text: str, expansion: XacroExpansion) -> tuple[Path, int | None]:
+    """The file and line of a legacy ``<tag ...>`` call: the description itself first, then its included files."""
+    for path, text in [(source, source_text), *((Path(p), t) for p, t in expansion.included)]:
+        for number, line in enumerate(text.splitlines(), start=1):
+            if re.search(rf"<{re.escape(tag)}[\s/>]", line) and f"<xacro:{tag}" not in line:
+                return path, number
+    return source, None
+
+
+def _check_legacy_macro_calls(doc: XmlDoc, source_text: str, expansion: XacroExpansion) -> None:
+    """xacro 2 leaves a macro call without the ``xacro:`` prefix (legacy ROS 1 syntax) as a plain element: name it,
+    whether the macro is defined in the description or in a file it includes (``<BB2-08S2C-38 .../>``,
+    ``<sensor_d435 .../>``)."""
+    macros = expansion.macro_names(source_text)
     for child in doc.root:
         tag = child.tag
         if tag in _URDF_CHILDREN or ":" in tag or "}" in tag:
@@ -85,10 +97,9 @@ def _check_legacy_macro_calls(doc: XmlDoc, source_text: str) -> None:
                 logger.warning("%s: <%s> (line %s of the expanded XML) is not a URDF element; if it is a macro "
                                "call, write <xacro:%s .../>", doc.path, tag, line, tag)
             continue
-        source_line = next((n for n, text in enumerate(source_text.splitlines(), start=1) if f"<{tag}" in text
-                            and f"<xacro:{tag}" not in text), None)
+        path, source_line = _legacy_call_site(tag, doc.path, source_text, expansion)
         raise SourceError(f"<{tag}> is a legacy macro call without the xacro: prefix, which xacro 2 no longer "
-                          "expands", path=doc.path, field=f"<{tag}>" + (f" line {source_line}" if source_line else ""),
+                          "expands", path=path, field=f"<{tag}>" + (f" line {source_line}" if source_line else ""),
                           hint=f"write <xacro:{tag} .../> (the ROS 1 xacro --inorder syntax)")
 
 

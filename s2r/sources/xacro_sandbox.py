@@ -247,11 +247,12 @@ def _env_lookups(env: Mapping[str, str]) -> tuple[Callable[[str], str], Callable
 
 
 @contextmanager
-def sandbox(description: Path, package_paths: Sequence[Path], *, env: Mapping[str, str] | None = None
-            ) -> Iterator[None]:
+def sandbox(description: Path, package_paths: Sequence[Path], *, env: Mapping[str, str] | None = None,
+            included: list[str] | None = None) -> Iterator[None]:
     """Expand xacro within this block under the rules of the module docstring (patches the ``xacro`` module).
 
     ``env``: the values ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``); nothing else.
+    ``included``: when given, the path of every file ``<xacro:include>`` reads is appended to it.
     """
     env_value, optenv_value = _env_lookups(dict(env or {}))
     import xacro
@@ -282,6 +283,8 @@ def sandbox(description: Path, package_paths: Sequence[Path], *, env: Mapping[st
     def checked_includes(spec: Any, symbols: Any) -> Iterator[str]:
         for name in include_files(spec, symbols):
             check_no_doctype(_checked_file(name, roots, "include of"))
+            if included is not None:
+                included.append(name)
             yield name
 
     symbols = xacro._global_symbols
