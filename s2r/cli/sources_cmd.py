@@ -77,8 +77,9 @@ def register(sub: Any, profile_sub: Any) -> None:
         description="Two camera sensors (or one multicamera) to a sim stereo profile in a stated convention.")
     _add_description_options(p_from)
     p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
-    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default="gazebo-classic",
-                        help="pixel convention of the intrinsics (default gazebo-classic)")
+    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default=None,
+                        help="pixel convention of the intrinsics (default: inferred from the simulator the file "
+                        "loads: gz-sim systems -> gz-sim, gazebo_ros plugins -> gazebo-classic; else gazebo-classic)")
     p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
     p_from.add_argument("--allow-bad-baseline", action="store_true",
                         help="write a pair lint calls an error (baseline along the optical axis, right camera on "

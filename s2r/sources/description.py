@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 if TYPE_CHECKING:
     from s2r.sources.sdf_include import SkippedInclude
+    from s2r.sources.simulator import SimulatorGuess
 
 __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec"]
 
@@ -153,7 +154,7 @@ class Description:
     """A parsed robot description: links (with source lines), joints and cameras.
 
     ``included_files`` are the files its includes read (SDF ``<include>``), ``skipped_includes`` the includes
-    that named nothing here, ``notes`` what was decided on the way (skipped includes, the pixel convention).
+    that named nothing here, ``notes`` what was decided on the way (skipped includes).
     """
 
     path: Path
@@ -166,3 +167,5 @@ class Description:
     included_files: list[Path] = field(default_factory=list)
     skipped_includes: list[SkippedInclude] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: the simulator the file is written for, from the plugins it loads (:mod:`s2r.sources.simulator`)
+    simulator: SimulatorGuess | None = None

@@ -15,11 +15,13 @@ from s2r.sources.description import CameraSpec, Description, FloatArray, JointSp
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
 from s2r.sources.sdf_include import expand_includes
+from s2r.sources.simulator import infer_simulator
 from s2r.sources.urdf import parse_urdf
 from s2r.sources.xacro_expand import XacroExpansion, expand_xacro_files, is_xacro
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["StereoPair", "check_skipped_includes", "load_description", "optical_pose", "select_pair", "stereo_pair"]
+__all__ = ["StereoPair", "check_skipped_includes", "load_description", "log_notes", "optical_pose", "select_pair",
+           "stereo_pair"]
 
 logger = logging.getLogger(__name__)
 _NO_CAMERA_HINT = ("add a <sensor type='camera'> inside <gazebo reference='LINK'> (URDF) or inside a <link> (SDF)")
@@ -65,6 +67,7 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
                           hint="expected a URDF <robot> or an <sdf> document")
     description.source_text, description.expanded_text = text, expanded
+    description.simulator = infer_simulator(doc, lines=not uses_xacro)
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
 
@@ -188,9 +191,10 @@ def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpe
 
 
 def check_skipped_includes(description: Description, *, left: str | None = None, right: str | None = None) -> None:
-    """Skip (with a note) the includes that named nothing here when they cannot hold a camera asked for: a
-    standard camera-less model (``model://sun``, ``ground_plane``), or any model when ``left`` and ``right`` both
-    name cameras defined inline. Otherwise the first such include is the error.
+    """Skip (with a note in ``description.notes``, see :func:`log_notes`) the includes that named nothing here when
+    they cannot hold a camera asked for: a standard camera-less model (``model://sun``, ``ground_plane``), or any
+    model when ``left`` and ``right`` both name cameras defined inline. Otherwise the first such include is the
+    error.
 
     Raises:
         SourceError: an include that names nothing here and might hold a camera asked for.
@@ -203,9 +207,15 @@ def check_skipped_includes(description: Description, *, left: str | None = None,
     for skipped in description.skipped_includes:
         why = "a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
         note = f"skipped <include> {skipped.uri} ({skipped.field}): not available here, {why}"
-        logger.warning("%s: note: %s", description.path, note)
         if note not in description.notes:
             description.notes.append(note)
+
+
+def log_notes(description: Description) -> None:
+    """Log what was decided while reading ``description`` (skipped includes), once the result stands: an error
+    stays the only line of a failed command."""
+    for note in description.notes:
+        logger.warning("%s: %s", description.path, note)
 
 
 def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None) -> StereoPair:

@@ -172,7 +172,7 @@ def test_world_with_standard_includes_and_inline_cameras(tmp_path: Path, capsys:
     out = tmp_path / "p.yaml"
     code, text = _cli(["profile", "from-urdf", str(FIXTURES / "world_inline_cameras.world"), "-o", str(out)], capsys)
     assert code == 0, text
-    assert "note: skipped <include> model://sun (<include> line 8)" in text and "Ground Plane" in text
+    assert "skipped <include> model://sun (<include> line 8)" in text and "Ground Plane" in text
     profile = load_profile(out)
     assert profile.left.fx_px == pytest.approx(320 / math.tan(1.047 / 2), abs=1e-9)
     assert pytest.approx([-0.1, 0.0, 0.0], abs=1e-12) == profile.T
@@ -190,3 +190,11 @@ def test_missing_include_that_might_hold_a_camera_still_errors(tmp_path: Path) -
     assert "skipped <include> model://mystery_rig" in profile.provenance.notes
     with pytest.raises(SourceError, match="mystery_rig"):
         load_description_profile(world, left="left_camera", right="front_right")
+
+
+def test_a_failed_command_prints_only_its_error_not_the_skip_notes(tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    world = tmp_path / "far.world"
+    world.write_text((FIXTURES / "world_inline_cameras.world").read_text().replace("0 -0.05 0 0 0 0", "0 -20 0 0 0 0"))
+    code, text = _cli(["profile", "from-urdf", str(world), "-o", str(tmp_path / "p.yaml")], capsys)
+    assert code == 2 and text.count("\n") == 1 and text.startswith("error: ") and "skipped" not in text
