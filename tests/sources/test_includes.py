@@ -198,3 +198,30 @@ def test_a_failed_command_prints_only_its_error_not_the_skip_notes(tmp_path: Pat
     world.write_text((FIXTURES / "world_inline_cameras.world").read_text().replace("0 -0.05 0 0 0 0", "0 -20 0 0 0 0"))
     code, text = _cli(["profile", "from-urdf", str(world), "-o", str(tmp_path / "p.yaml")], capsys)
     assert code == 2 and text.count("\n") == 1 and text.startswith("error: ") and "skipped" not in text
+
+
+def test_random_include_graphs_answer_with_a_profile_or_one_error(tmp_path: Path) -> None:
+    """Seeded fuzz: files including each other, themselves, missing files, folders outside and model:// names with
+    '..' answer with a profile or one SourceError, never read outside the roots, within the budget."""
+    import random
+
+    rng = random.Random(23)
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "cam.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
+    uris = ["f{}.sdf", "../outside/cam.sdf", f"{outside}/cam.sdf", f"file://{outside}/cam.sdf", "model://../outside",
+            "model://cams", "model://sun", "https://fuel.gazebosim.org/1.0/x/models/y", "missing.sdf", "f{}.sdf"]
+    for case in range(12):
+        desc = tmp_path / f"case{case}"
+        (desc / "models" / "cams").mkdir(parents=True)
+        (desc / "models" / "cams" / "model.sdf").write_text(f'<sdf><model name="cams">{CAMERA_LINK}</model></sdf>')
+        for index in range(5):
+            picks = [rng.choice(uris).format(rng.randrange(5)) for _ in range(rng.randrange(4))]
+            body = "".join(f"<include><uri>{u}</uri><name>i{n}</name></include>" for n, u in enumerate(picks))
+            (desc / f"f{index}.sdf").write_text(f'<sdf><model name="f{index}">{body}</model></sdf>')
+        try:
+            profile = load_description_profile(desc / "f0.sdf", package_paths=[desc / "models"])
+        except SourceError as exc:
+            assert "\n" not in str(exc) and "Traceback" not in str(exc)
+            continue
+        assert all(str(outside) not in s.path for s in profile.provenance.sources)
