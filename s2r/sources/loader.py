@@ -193,19 +193,23 @@ def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpe
 def check_skipped_includes(description: Description, *, left: str | None = None, right: str | None = None) -> None:
     """Skip (with a note in ``description.notes``, see :func:`log_notes`) the includes that named nothing here when
     they cannot hold a camera asked for: a standard camera-less model (``model://sun``, ``ground_plane``), or any
-    model when ``left`` and ``right`` both name cameras defined inline. Otherwise the first such include is the
-    error.
+    model when ``left`` and ``right`` both name cameras defined inline, or (no names) when the file itself defines
+    exactly two cameras, the pair. Otherwise (the pair could be in the missing model) the first such include is
+    the error.
 
     Raises:
         SourceError: an include that names nothing here and might hold a camera asked for.
     """
     named_inline = left is not None and right is not None and all(
         any(c.matches(q) for c in description.cameras) for q in (left, right))
+    pair_inline = left is None and right is None and len(description.cameras) == 2
     for skipped in description.skipped_includes:
-        if not (skipped.cameraless or named_inline):
+        if not (skipped.cameraless or named_inline or pair_inline):
             raise skipped.error()
     for skipped in description.skipped_includes:
-        why = "a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
+        why = ("a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
+               if named_inline else "the file defines a stereo pair itself (if this model holds the cameras meant, "
+               "pass --package-path with its folder)")
         note = f"skipped <include> {skipped.uri} ({skipped.field}): not available here, {why}"
         if note not in description.notes:
             description.notes.append(note)

@@ -184,12 +184,17 @@ def test_missing_include_that_might_hold_a_camera_still_errors(tmp_path: Path) -
     world_text = (FIXTURES / "world_inline_cameras.world").read_text().replace("model://sun", "model://mystery_rig")
     world = tmp_path / "w.world"
     world.write_text(world_text)
-    with pytest.raises(SourceError, match=r"<include> line 8: model 'mystery_rig' .* not found"):
-        load_description_profile(world)
+    profile = load_description_profile(world)  # the file's own two cameras are the pair: said in a note
+    assert "skipped <include> model://mystery_rig (<include> line 8): not available here, the file defines a " \
+           "stereo pair itself" in profile.provenance.notes
     profile = load_description_profile(world, left="left_camera", right="right_camera")  # asked for inline ones
     assert "skipped <include> model://mystery_rig" in profile.provenance.notes
     with pytest.raises(SourceError, match="mystery_rig"):
         load_description_profile(world, left="left_camera", right="front_right")
+    one = world_text.replace('<sensor name="right_camera" type="camera">', '<sensor name="r" type="imu">')
+    world.write_text(one)  # one camera inline: the other may be in the missing model
+    with pytest.raises(SourceError, match=r"<include> line 8: model 'mystery_rig' .* not found"):
+        load_description_profile(world)
 
 
 def test_a_failed_command_prints_only_its_error_not_the_skip_notes(tmp_path: Path,
