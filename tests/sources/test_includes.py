@@ -230,3 +230,11 @@ def test_random_include_graphs_answer_with_a_profile_or_one_error(tmp_path: Path
             assert "\n" not in str(exc) and "Traceback" not in str(exc)
             continue
         assert all(str(outside) not in s.path for s in profile.provenance.sources)
+
+
+def test_models_nested_thousands_deep_are_one_error_not_a_recursion_error(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    deep = tmp_path / "deep.sdf"
+    deep.write_text("<sdf>" + '<model name="m">' * 5000 + "</model>" * 5000 + "</sdf>")
+    code, text = _cli(["lint", str(deep)], capsys)
+    assert code == 2 and text.count("\n") == 1 and "models nested more than 64 deep" in text
