@@ -31,7 +31,7 @@ from pathlib import Path
 from s2r.errors import SourceError
 from s2r.fileio import NotARegularFile, read_regular_file
 
-__all__ = ["CAMERALESS_MODELS", "IncludeBudget", "MissingInclude", "is_cameraless", "model_name", "resolve"]
+__all__ = ["CAMERALESS_MODELS", "IncludeBudget", "MissingInclude", "is_cameraless", "model_name", "resolve", "shown"]
 
 #: Standard Gazebo models that hold no sensor (lights and planes), as normalised by :func:`model_name`.
 CAMERALESS_MODELS = frozenset({"sun", "ground_plane", "asphalt_plane"})
@@ -50,6 +50,13 @@ class MissingInclude(SourceError):
                  hint: str | None = None) -> None:
         super().__init__(message, path=path, field=field, hint=hint)
         self.uri = uri
+
+
+def shown(text: str, limit: int = 200) -> str:
+    """``text`` (a URI) as it may appear in a message or log line: cut to ``limit`` characters, and quoted with
+    escapes (``ascii``) when it holds a character that is not printable (a newline, ESC)."""
+    cut = text[:limit]
+    return cut if cut.isprintable() else ascii(cut)
 
 
 def model_name(uri: str) -> str:
@@ -125,7 +132,7 @@ def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str
     real_roots = [r for r in (_real(Path(p)) for p in roots) if r is not None]
     text = uri.strip()
     if text.startswith(_WEB):
-        raise MissingInclude(f"cannot include {text[:200]}: web (Fuel) models are not downloaded", uri=uri,
+        raise MissingInclude(f"cannot include {shown(text)}: web (Fuel) models are not downloaded", uri=uri,
                              path=including_file, field=field,
                              hint="download the model and pass its parent folder with --package-path")
     if text.startswith("model://"):
@@ -169,9 +176,9 @@ def _resolve_model(uri: str, including_file: Path, roots: Sequence[Path], field:
             raise MissingInclude(f"model {head!r} has no file {uri[:200]!r}", uri=uri, path=including_file,
                                  field=field, hint="fix the <uri> or the model's model.config")
         return target
-    raise MissingInclude(f"model {head[:100]!r} ({uri[:200]}) not found in any model folder", uri=uri,
+    raise MissingInclude(f"model {head[:100]!r} ({shown(uri)}) not found in any model folder", uri=uri,
                          path=including_file, field=field,
-                         hint=f"pass --package-path DIR with the folder holding {head[:100]}/, or set one of "
+                         hint=f"pass --package-path DIR with the folder holding {shown(head, 100)}/, or set one of "
                               "GZ_SIM_RESOURCE_PATH, IGN_GAZEBO_RESOURCE_PATH, GAZEBO_MODEL_PATH")
 
 

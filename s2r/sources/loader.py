@@ -12,6 +12,7 @@ from s2r.errors import SourceError
 from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
+from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
 from s2r.sources.sdf_include import expand_includes
@@ -210,7 +211,7 @@ def check_skipped_includes(description: Description, *, left: str | None = None,
         why = ("a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
                if named_inline else "the file defines a stereo pair itself (if this model holds the cameras meant, "
                "pass --package-path with its folder)")
-        note = f"skipped <include> {skipped.uri} ({skipped.field}): not available here, {why}"
+        note = f"skipped <include> {shown(skipped.uri)} ({skipped.field}): not available here, {why}"
         if note not in description.notes:
             description.notes.append(note)
 
