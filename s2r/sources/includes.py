@@ -16,6 +16,21 @@ Every reader that follows includes (SDF ``<include><uri>``; an MJCF reader's ``<
 
 Unknown models and web (Fuel) URIs raise :class:`MissingInclude`, which a reader may defer: a world that includes
 ``model://sun`` need not fail when the cameras asked for are defined inline.
+
+A reader follows its includes like this (one budget for the whole description; run the walk under
+:func:`s2r.sources.isolation.run_limited` as :mod:`s2r.sources.sdf_include` does)::
+
+    budget = IncludeBudget()
+    with budget.top(main_file):
+        ...  # for each include element of a file `current`:
+        path = resolve(uri, including_file=current, roots=roots, field=f"<include> line {n}", budget=budget)
+        with budget.nested(path, including_file=current, field=...):
+            text = budget.read(path, including_file=current, field=...)
+            ...  # parse text, follow its own includes with current = path
+    budget.included  # every file read, for the provenance
+
+Relative URIs start from ``including_file``'s folder (a format whose includes are relative to the main file passes
+the main file).
 """
 
 from __future__ import annotations
