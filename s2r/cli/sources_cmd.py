@@ -12,7 +12,7 @@ from s2r.cli._common import add_force, add_json, load_profile, print_json
 from s2r.errors import SourceError
 from s2r.fileio import atomic_write_text, check_output_free
 
-__all__ = ["CONVENTION_CHOICES", "EXPORT_FORMAT_CHOICES", "parse_xacro_args", "register"]
+__all__ = ["CONVENTION_CHOICES", "EXPORT_FORMAT_CHOICES", "parse_env_values", "parse_xacro_args", "register"]
 
 #: ``s2r.sources.CONVENTIONS`` and ``EXPORT_FORMATS``, repeated here so that building the parser does not import
 #: s2r.sources (the robot-description readers load only when a description command runs; a test keeps them equal).
@@ -35,11 +35,26 @@ def parse_xacro_args(items: list[str]) -> dict[str, str]:
     return out
 
 
+def parse_env_values(items: list[str]) -> dict[str, str]:
+    """``["NAME=VALUE", ...]`` (``--env``) -> mapping; SourceError naming the bad item otherwise."""
+    out: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.replace("_", "a").isalnum() or not name.isascii():
+            raise SourceError(f"cannot read --env {item!r}", field="--env",
+                              hint="write --env NAME=VALUE with a variable name of letters, digits and '_'")
+        out[name] = value
+    return out
+
+
 def _add_description_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", type=Path, help="robot description: .urdf, .xacro / .urdf.xacro, .sdf or .world")
     p.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments, right after FILE")
     p.add_argument("--arg", dest="xacro_more", action="append", default=[], metavar="NAME:=VALUE",
                    help="a xacro argument anywhere on the line (repeatable)")
+    p.add_argument("--env", dest="env_values", action="append", default=[], metavar="NAME=VALUE",
+                   help="a value xacro's $(env NAME) / $(optenv NAME default) see, e.g. JACKAL_BB2=1 (repeatable; "
+                   "the machine's environment is never read)")
     p.add_argument("--package-path", type=Path, action="append", default=[], metavar="DIR",
                    help="folder searched for $(find pkg) (repeatable; then ROS_PACKAGE_PATH)")
     p.add_argument("--left", default=None, help="left camera (sensor, sensor/camera, camera or link name)")
@@ -62,8 +77,9 @@ def register(sub: Any, profile_sub: Any) -> None:
         description="Two camera sensors (or one multicamera) to a sim stereo profile in a stated convention.")
     _add_description_options(p_from)
     p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
-    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default="gazebo-classic",
-                        help="pixel convention of the intrinsics (default gazebo-classic)")
+    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default=None,
+                        help="pixel convention of the intrinsics (default: inferred from the simulator the file "
+                        "loads: gz-sim systems -> gz-sim, gazebo_ros plugins -> gazebo-classic; else gazebo-classic)")
     p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
     p_from.add_argument("--allow-bad-baseline", action="store_true",
                         help="write a pair lint calls an error (baseline along the optical axis, right camera on "
@@ -105,7 +121,7 @@ def _cmd_lint(args: argparse.Namespace) -> int:
         info = read_camera_info(args.camera_info)
     xacro_args = parse_xacro_args(args.xacro_args + args.xacro_more)
     findings = lint_description(args.file, camera_info=info, xacro_args=xacro_args, package_paths=args.package_path,
-                                left=args.left, right=args.right)
+                                left=args.left, right=args.right, env=parse_env_values(args.env_values))
     errors = sum(f.severity == "error" for f in findings)
     if args.json:
         print_json({"file": str(args.file), "errors": errors, "findings": [f.as_dict() for f in findings]})
@@ -128,7 +144,7 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
     profile = load_description_profile(
         args.file, convention=args.convention, left=args.left, right=args.right,
         xacro_args=parse_xacro_args(args.xacro_args + args.xacro_more), package_paths=args.package_path, name=args.name,
-        allow_bad_baseline=args.allow_bad_baseline)
+        allow_bad_baseline=args.allow_bad_baseline, env=parse_env_values(args.env_values))
     dump_profile(profile, args.output, force=args.force)
     if args.json:
         print_json({"output": str(args.output), "profile": profile})

@@ -9,9 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from s2r.sources.sdf_include import SkippedInclude
+    from s2r.sources.simulator import SimulatorGuess
 
 __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec"]
 
@@ -146,7 +151,11 @@ class JointSpec:
 
 @dataclass
 class Description:
-    """A parsed robot description: links (with source lines), joints and cameras."""
+    """A parsed robot description: links (with source lines), joints and cameras.
+
+    ``included_files`` are the files its includes read (SDF ``<include>``), ``skipped_includes`` the includes
+    that named nothing here, ``notes`` what was decided on the way (skipped includes).
+    """
 
     path: Path
     kind: str
@@ -155,3 +164,8 @@ class Description:
     cameras: list[CameraSpec]
     expanded_text: str = ""
     source_text: str = ""
+    included_files: list[Path] = field(default_factory=list)
+    skipped_includes: list[SkippedInclude] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    #: the simulator the file is written for, from the plugins it loads (:mod:`s2r.sources.simulator`)
+    simulator: SimulatorGuess | None = None

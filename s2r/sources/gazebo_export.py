@@ -26,7 +26,9 @@ infrared imagers are mono (``L8``) and publish on realsense2_camera's topics (``
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 
@@ -44,14 +46,39 @@ from s2r.sources.conventions import (
     texture_center,
 )
 from s2r.sources.description import FloatArray
+from s2r.sources.xmlparse import parse_xml
 
-__all__ = ["EXPORT_FORMATS", "FY_WARN_EDGE_PX", "OPTICAL_RPY", "export_gazebo", "is_realsense", "lens_intrinsics"]
+__all__ = ["EXPORT_FORMATS", "FY_WARN_EDGE_PX", "OPTICAL_RPY", "comment_text", "export_gazebo", "is_realsense",
+           "lens_intrinsics"]
 
 EXPORT_FORMATS = ("urdf", "sdf", "gz-sim")
 #: warn about camera_info's fy = fx only past this shift at the image's top and bottom edges, pixels.
 FY_WARN_EDGE_PX = 0.1
 #: rpy of a ROS optical frame in its camera link (z forward, x right, y down).
 OPTICAL_RPY = f"{-math.pi / 2!r} 0 {-math.pi / 2!r}"
+
+
+#: Characters XML 1.0 cannot carry at all, escaped or not (C0 controls but tab/LF/CR, surrogates, U+FFFE/FFFF).
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+
+
+def comment_text(text: str) -> str:
+    """``text`` made safe inside ``<!-- -->``: no ``--`` (``cam--v2`` -> ``cam- -v2``), no trailing ``-``, no
+    character XML cannot carry (shown as ``?``)."""
+    safe = _NOT_XML.sub("?", text)
+    while "--" in safe:
+        safe = safe.replace("--", "- -")
+    return safe + " " if safe.endswith("-") else safe
+
+
+def _xml_value(value: str, field: str) -> str:
+    """``value`` for an XML attribute or text (ElementTree escapes ``< & > "``); SourceError when it holds a
+    character no XML file can carry (a control character)."""
+    bad = _NOT_XML.search(value)
+    if bad:
+        raise SourceError(f"{value[:60]!a} holds the character {bad.group()!a}, which no XML file can carry",
+                          field=field, hint="use letters, digits, '_', '-' and '.'")
+    return value
 
 
 def _num(value: float) -> str:
@@ -291,10 +318,15 @@ def export_gazebo(profile: StereoProfile, *, fmt: str = "urdf", noise: float | N
         raise SourceError(f"unknown export format {fmt!r}", field="--format", hint=f"use {', '.join(EXPORT_FORMATS)}")
     if noise is not None and not (0.0 <= noise <= 1.0 and math.isfinite(noise)):
         raise SourceError(f"noise stddev must be in [0, 1] (intensities), got {noise}", field="--noise")
+    _xml_value(profile.name, "name")
+    if parent_link is not None:
+        _xml_value(parent_link, "--parent-link")
     ex = _Exporter(profile, fmt, noise)
     root = _urdf(ex, parent_link) if fmt == "urdf" else _sdf(ex)
     ET.indent(root, space="  ")
-    header = (f"<?xml version=\"1.0\"?>\n<!-- s2r profile export-gazebo, format {fmt}: {profile.name} "
-              f"({profile.provenance.origin}, {profile.provenance.convention} pixels); baseline "
-              f"{profile.baseline_m:.6g} m. horizontal_fov = 2 atan(W / (2 fx)). -->\n")
-    return header + ET.tostring(root, encoding="unicode") + "\n", ex.warnings
+    about = comment_text(f"s2r profile export-gazebo, format {fmt}: {profile.name} ({profile.provenance.origin}, "
+                         f"{profile.provenance.convention} pixels); baseline {profile.baseline_m:.6g} m. "
+                         "horizontal_fov = 2 atan(W / (2 fx)).")
+    text = f"<?xml version=\"1.0\"?>\n<!-- {about} -->\n" + ET.tostring(root, encoding="unicode") + "\n"
+    parse_xml(text, Path(f"export-gazebo {fmt}"))  # s2r's own reader accepts every export (else a bug here)
+    return text, ex.warnings

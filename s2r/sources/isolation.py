@@ -105,17 +105,16 @@ def _read_all(read_fd: int, pid: int, wall_s: float) -> bytes | None:
             chunks.append(chunk)
 
 
-def _limit_error(what: str, path: Path, reason: str) -> SourceError:
-    return SourceError(f"{what} stopped: {reason}", path=path, field="xacro",
-                       hint="a runaway expression such as ${10**10**10} or a macro that expands itself without "
-                            "end; fix the file")
+_XACRO_HINT = "a runaway expression such as ${10**10**10} or a macro that expands itself without end; fix the file"
 
 
-def run_limited(work: Callable[[], T], *, path: Path, what: str, limits: Limits) -> T:
+def run_limited(work: Callable[[], T], *, path: Path, what: str, limits: Limits, field: str = "xacro",
+                hint: str = _XACRO_HINT) -> T:
     """Return ``work()`` computed in a child process under ``limits``.
 
     ``work`` must return a picklable value; an :class:`~s2r.errors.S2RError` it raises is raised again here
-    (as a :class:`~s2r.errors.SourceError` with the same message, file, field and hint).
+    (as a :class:`~s2r.errors.SourceError` with the same message, file, field and hint). ``field`` and ``hint``
+    are those of the error raised when a limit is overrun (``what`` stopped: which limit).
 
     Raises:
         SourceError: the child overran a limit, died, or ``work`` raised an S2RError.
@@ -135,15 +134,18 @@ def run_limited(work: Callable[[], T], *, path: Path, what: str, limits: Limits)
     finally:
         os.close(read_fd)
         _, status = os.waitpid(pid, 0)
+    def stopped(reason: str) -> SourceError:
+        return SourceError(f"{what} stopped: {reason}", path=path, field=field, hint=hint)
+
     if data is None:
-        raise _limit_error(what, path, f"it took longer than {limits.wall_s:g} s")
+        raise stopped(f"it took longer than {limits.wall_s:g} s")
     if os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGXCPU:
-        raise _limit_error(what, path, f"it used more than {limits.cpu_s} s of CPU")
+        raise stopped(f"it used more than {limits.cpu_s} s of CPU")
     if not data:
-        raise _limit_error(what, path, f"the expanding process ended without a result (status {status})")
+        raise stopped(f"the expanding process ended without a result (status {status})")
     kind, value = pickle.loads(data)  # our own child's bytes, through our own pipe
     if kind == "memory":
-        raise _limit_error(what, path, f"it needed more than {limits.memory_bytes >> 20} MiB of memory")
+        raise stopped(f"it needed more than {limits.memory_bytes >> 20} MiB of memory")
     if kind == "error":
         _name, message, err_path, field, hint = value
         raise SourceError(message, path=err_path, field=field, hint=hint)

@@ -29,7 +29,7 @@ from s2r.errors import SourceError
 from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
 from s2r.sources.description import CameraSpec, Description
 from s2r.sources.lint_geometry import baseline_findings
-from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
+from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
 from s2r.sources.profile_builder import seed_matcher
 
 __all__ = ["SEVERITIES", "Finding", "lint_description"]
@@ -66,6 +66,13 @@ class _Report:
         self.description = description
         self.findings: list[Finding] = []
         self.xacro = description.source_text != description.expanded_text
+
+    def simulator(self, camera: CameraSpec) -> str | None:
+        """The simulator the file is for (from the plugins it loads), else classic for a gazebo_ros camera."""
+        guess = self.description.simulator
+        if guess is not None and guess.simulator is not None:
+            return guess.simulator
+        return "gazebo-classic" if camera.plugin is not None else None
 
     def line(self, line: int | None, *needles: str) -> int | None:
         """Line in the file on disk: the parsed line, or for xacro the first source line holding a needle."""
@@ -104,6 +111,13 @@ def _pair_rules(report: _Report, pair: StereoPair) -> None:
                    right.lines.get("update_rate"), "<update_rate>")
 
 
+def _lens_consequence(simulator: str | None) -> str:
+    """What a ``<lens><intrinsics>`` / ``horizontal_fov`` disagreement does in the simulator the file is for."""
+    classic = "Gazebo classic renders the intrinsics but gazebo_ros publishes camera_info from horizontal_fov"
+    gz = "gz-sim renders and publishes the intrinsics, so horizontal_fov says something else"
+    return {"gazebo-classic": classic, "gz-sim": gz}.get(simulator or "", f"{gz}; {classic}")
+
+
 def _focal_rules(report: _Report, camera: CameraSpec) -> None:
     f = focal_from_hfov(camera.width, camera.hfov_rad)
     plugin = camera.plugin
@@ -117,8 +131,8 @@ def _focal_rules(report: _Report, camera: CameraSpec) -> None:
     lens = camera.lens
     if lens is not None and (abs(lens.fx - f) > FOCAL_REL_TOL * f or abs(lens.fy - f) > FOCAL_REL_TOL * f):
         report.add("warning", "lens-intrinsics", f"camera {camera.name!r}: <lens><intrinsics> fx {lens.fx:g} "
-                   f"fy {lens.fy:g} px disagree with horizontal_fov {camera.hfov_rad} rad (fx = {f:.3f} px): gz-sim "
-                   "renders the intrinsics, Gazebo classic the FOV", f"set horizontal_fov to "
+                   f"fy {lens.fy:g} px disagree with horizontal_fov {camera.hfov_rad} rad (fx = {f:.3f} px): "
+                   f"{_lens_consequence(report.simulator(camera))}", f"set horizontal_fov to "
                    f"{hfov_from_focal(camera.width, lens.fx):.6f} or fx = fy = {f:.3f}", lens.line, "<intrinsics>")
 
 
@@ -267,20 +281,20 @@ def _profile_rule(report: _Report, description: Description, pair: Any) -> None:
 
 def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: Mapping[str, str] | None = None,
                      package_paths: Sequence[Path] = (), left: str | None = None,
-                     right: str | None = None) -> list[Finding]:
+                     right: str | None = None, env: Mapping[str, str] | None = None) -> list[Finding]:
     """Lint a URDF / xacro / SDF stereo rig (and optionally a published camera_info against it).
 
     Args:
         path: the description file.
         camera_info: an object with ``width``, ``height``, ``K`` (3x3, pixels) and optionally ``P`` (3x4)
             and ``camera_name`` (as :func:`s2r.formats.ros.read_camera_info` returns).
-        xacro_args, package_paths: as for :func:`s2r.sources.load_description_profile`.
+        xacro_args, package_paths, env: as for :func:`s2r.sources.load_description_profile`.
         left, right: camera names when the pair is not unambiguous.
 
     Returns:
         Findings, errors first. Unreadable input raises :class:`~s2r.errors.SourceError` instead.
     """
-    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths)
+    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths, env=env)
     pair = stereo_pair(description, left=left, right=right)
     report = _Report(description)
     for joint in pair.movable_joints:
@@ -299,5 +313,6 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
     _clip_rules(report, pair)
     if camera_info is not None:
         _camera_info_rules(report, pair, camera_info)
+    log_notes(description)
     order = {s: i for i, s in enumerate(SEVERITIES)}
     return sorted(report.findings, key=lambda f: order.get(f.severity, 9))

@@ -12,14 +12,17 @@ from s2r.errors import SourceError
 from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
+from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.sdf import parse_sdf
-from s2r.sources.sdf_include import resolve_includes
+from s2r.sources.sdf_include import expand_includes
+from s2r.sources.simulator import infer_simulator
 from s2r.sources.urdf import parse_urdf
-from s2r.sources.xacro_expand import expand_xacro, is_xacro
+from s2r.sources.xacro_expand import XacroExpansion, expand_xacro_files, is_xacro
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["StereoPair", "load_description", "optical_pose", "select_pair", "stereo_pair"]
+__all__ = ["StereoPair", "check_skipped_includes", "load_description", "log_notes", "optical_pose", "select_pair",
+           "stereo_pair"]
 
 logger = logging.getLogger(__name__)
 _NO_CAMERA_HINT = ("add a <sensor type='camera'> inside <gazebo reference='LINK'> (URDF) or inside a <link> (SDF)")
@@ -36,12 +39,13 @@ class StereoPair:
 
 
 def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None = None,
-                     package_paths: Sequence[Path] = ()) -> Description:
+                     package_paths: Sequence[Path] = (), env: Mapping[str, str] | None = None) -> Description:
     """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
 
     A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
     ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
-    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`).
+    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`). ``env`` is what xacro's ``$(env)`` / ``$(optenv)`` see
+    (``--env NAME=VALUE``); the machine's environment is never read for them.
 
     Raises:
         SourceError: missing file, xacro failure, malformed XML, unknown root element, missing links.
@@ -49,18 +53,22 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     source = Path(path)
     text = read_text_file(source, error=SourceError)
     uses_xacro = is_xacro(source) or "xmlns:xacro" in text or "<xacro:" in text  # .gazebo, .xacro.sdf, ...
-    expanded = expand_xacro(source, xacro_args=xacro_args, package_paths=package_paths) if uses_xacro else text
+    expansion = (expand_xacro_files(source, xacro_args=xacro_args, package_paths=package_paths, env=env)
+                 if uses_xacro else XacroExpansion(text))
+    expanded = expansion.text
     doc = parse_xml(expanded, source)
     if doc.root.tag == "robot":
-        _check_legacy_macro_calls(doc, text)
+        _check_legacy_macro_calls(doc, text, expansion)
         description = parse_urdf(doc)
     elif doc.root.tag in ("sdf", "model", "world"):
-        resolve_includes(doc, source.parent, package_paths)
+        included, skipped = expand_includes(doc, package_paths)
         description = parse_sdf(doc)
+        description.included_files, description.skipped_includes = included, skipped
     else:
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
                           hint="expected a URDF <robot> or an <sdf> document")
     description.source_text, description.expanded_text = text, expanded
+    description.simulator = infer_simulator(doc, lines=not uses_xacro)
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
 
@@ -69,9 +77,20 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
 _URDF_CHILDREN = frozenset({"link", "joint", "gazebo", "transmission", "material", "ros2_control", "sensor"})
 
 
-def _check_legacy_macro_calls(doc: XmlDoc, source_text: str) -> None:
-    """xacro 2 leaves a macro call without the ``xacro:`` prefix (legacy ROS 1 syntax) as a plain element: name it."""
-    macros = set(re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)[\"']", source_text))
+def _legacy_call_site(tag: str, source: Path, source_text: str, expansion: XacroExpansion) -> tuple[Path, int | None]:
+    """The file and line of a legacy ``<tag ...>`` call: the description itself first, then its included files."""
+    for path, text in [(source, source_text), *((Path(p), t) for p, t in expansion.included)]:
+        for number, line in enumerate(text.splitlines(), start=1):
+            if re.search(rf"<{re.escape(tag)}[\s/>]", line) and f"<xacro:{tag}" not in line:
+                return path, number
+    return source, None
+
+
+def _check_legacy_macro_calls(doc: XmlDoc, source_text: str, expansion: XacroExpansion) -> None:
+    """xacro 2 leaves a macro call without the ``xacro:`` prefix (legacy ROS 1 syntax) as a plain element: name it,
+    whether the macro is defined in the description or in a file it includes (``<BB2-08S2C-38 .../>``,
+    ``<sensor_d435 .../>``)."""
+    macros = expansion.macro_names(source_text)
     for child in doc.root:
         tag = child.tag
         if tag in _URDF_CHILDREN or ":" in tag or "}" in tag:
@@ -82,10 +101,9 @@ def _check_legacy_macro_calls(doc: XmlDoc, source_text: str) -> None:
                 logger.warning("%s: <%s> (line %s of the expanded XML) is not a URDF element; if it is a macro "
                                "call, write <xacro:%s .../>", doc.path, tag, line, tag)
             continue
-        source_line = next((n for n, text in enumerate(source_text.splitlines(), start=1) if f"<{tag}" in text
-                            and f"<xacro:{tag}" not in text), None)
+        path, source_line = _legacy_call_site(tag, doc.path, source_text, expansion)
         raise SourceError(f"<{tag}> is a legacy macro call without the xacro: prefix, which xacro 2 no longer "
-                          "expands", path=doc.path, field=f"<{tag}>" + (f" line {source_line}" if source_line else ""),
+                          "expands", path=path, field=f"<{tag}>" + (f" line {source_line}" if source_line else ""),
                           hint=f"write <xacro:{tag} .../> (the ROS 1 xacro --inorder syntax)")
 
 
@@ -125,6 +143,13 @@ def select_pair(description: Description, *, left: str | None = None,
             raise SourceError("no camera sensor found: <sensor:camera> is the Gazebo 0.x (pre-SDF, ROS diamondback) "
                               "format, which no current Gazebo reads", path=description.path, field="<sensor:camera>",
                               hint="describe the cameras as SDF <sensor type='camera'> (Gazebo classic or gz-sim)")
+        switches = sorted(set(re.findall(r"\$\((?:opt)?env\s+([A-Za-z_][A-Za-z0-9_]*)", description.source_text or "")))
+        if switches:  # Clearpath: payloads are switched on by environment variables s2r does not read
+            shown = ", ".join(switches[:6]) + (", ..." if len(switches) > 6 else "")
+            raise SourceError("no camera sensor found", path=description.path, field="<sensor>",
+                              hint=f"this description reads environment variables ({shown}) that s2r does not take "
+                              "from the machine: pass the ones that switch the cameras on with --env NAME=VALUE "
+                              f"(e.g. --env {switches[0]}=1)")
         raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)
     if left is not None and right is not None:
         pair = (_pick(description, left, "--left"), _pick(description, right, "--right"))
@@ -166,8 +191,43 @@ def optical_pose_between(tree: KinematicTree, left: CameraSpec, right: CameraSpe
     return invert_transform(optical_pose(left)) @ T_links @ optical_pose(right)
 
 
+def check_skipped_includes(description: Description, *, left: str | None = None, right: str | None = None) -> None:
+    """Skip (with a note in ``description.notes``, see :func:`log_notes`) the includes that named nothing here when
+    they cannot hold a camera asked for: a standard camera-less model (``model://sun``, ``ground_plane``), or any
+    model when ``left`` and ``right`` both name cameras defined inline, or (no names) when the file itself defines
+    exactly two cameras, the pair. Otherwise (the pair could be in the missing model) the first such include is
+    the error.
+
+    Raises:
+        SourceError: an include that names nothing here and might hold a camera asked for.
+    """
+    named_inline = left is not None and right is not None and all(
+        any(c.matches(q) for c in description.cameras) for q in (left, right))
+    pair_inline = left is None and right is None and len(description.cameras) == 2
+    for skipped in description.skipped_includes:
+        if not (skipped.cameraless or named_inline or pair_inline):
+            raise skipped.error()
+    for skipped in description.skipped_includes:
+        why = ("a standard model without cameras" if skipped.cameraless else "the cameras asked for are inline"
+               if named_inline else "the file defines a stereo pair itself (if this model holds the cameras meant, "
+               "pass --package-path with its folder)")
+        note = f"skipped <include> {shown(skipped.uri)} ({skipped.field}): not available here, {why}"
+        if note not in description.notes:
+            description.notes.append(note)
+
+
+def log_notes(description: Description) -> None:
+    """Log what was decided while reading ``description`` (skipped includes), once the result stands: an error
+    stays the only line of a failed command."""
+    for note in description.notes:
+        logger.warning("%s: %s", description.path, note)
+
+
 def stereo_pair(description: Description, *, left: str | None = None, right: str | None = None) -> StereoPair:
-    """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path."""
+    """Choose the pair and compute its optical-frame geometry; warn about movable joints on the path.
+
+    Includes that named nothing here are skipped or refused first (:func:`check_skipped_includes`)."""
+    check_skipped_includes(description, left=left, right=right)
     cam_left, cam_right = select_pair(description, left=left, right=right)
     tree = KinematicTree(description)
     _, movable = tree.transform(cam_left.link, cam_right.link)

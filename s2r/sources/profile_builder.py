@@ -36,9 +36,9 @@ from s2r.sources.conventions import (
     scale_distortion,
 )
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
-from s2r.sources.loader import StereoPair, load_description, optical_pose, stereo_pair
+from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
 
-__all__ = ["SEED_SGBM", "load_description_profile", "profile_from_pair", "seed_matcher"]
+__all__ = ["SEED_SGBM", "choose_convention", "load_description_profile", "profile_from_pair", "seed_matcher"]
 
 logger = logging.getLogger(__name__)
 
@@ -65,7 +65,28 @@ def seed_matcher(fx_px: float, baseline_m: float, width_px: int, *, far_limit_m:
     return MatcherSettings(algorithm="sgbm", min_depth_m=min_depth, max_depth_m=max_depth, **SEED_SGBM)
 
 
-def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
+def choose_convention(description: Description) -> tuple[str, str]:
+    """The pixel convention of a description read without ``--convention``, and why (for the log and provenance):
+    the simulator it loads plugins of (:mod:`s2r.sources.simulator`), else ``gazebo-classic`` (the default)."""
+    guess = description.simulator
+    if guess is not None and guess.simulator is not None:
+        return guess.simulator, f"inferred from {guess.evidence}"
+    if guess is not None and guess.evidence:
+        return "gazebo-classic", f"assumed: the file loads {guess.evidence}"
+    return "gazebo-classic", "assumed: the file loads no gz-sim system and no gazebo_ros plugin (the default)"
+
+
+def _simulator(spec: CameraSpec, description: Description | None, convention: str) -> str | None:
+    """The simulator whose advice applies to ``spec``: the one the file loads, else the convention's, else None."""
+    guess = description.simulator if description is not None else None
+    if guess is not None and guess.simulator is not None:
+        return guess.simulator
+    if spec.plugin is not None:
+        return "gazebo-classic"  # a gazebo_ros camera plugin on the camera itself
+    return convention if convention in ("gazebo-classic", "gz-sim") else None
+
+
+def _distortion(spec: CameraSpec, k: Intrinsics, convention: str, simulator: str | None = None) -> Distortion:
     d = spec.distortion
     if d is None or d.is_zero:
         return Distortion()
@@ -75,7 +96,7 @@ def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
         coeffs = scale_distortion(coeffs, 1.0 / gz_sim_distortion_scale(spec.width, spec.height, spec.hfov_rad))
     elif not d.legacy_mode:  # Gazebo classic's <ignition:legacy_mode>false</ignition:legacy_mode> (PR 3009)
         coeffs = scale_distortion(coeffs, 1.0 / classic_distortion_scale(spec.width, spec.height, spec.hfov_rad))
-    _warn_crop(spec, coeffs, d.center, convention)
+    _warn_crop(spec, coeffs, d.center, simulator)
     fit = gazebo_to_opencv_distortion(*coeffs, width=spec.width, height=spec.height,
                                       fx=k.fx, fy=k.fy, center=d.center, principal=(k.cx - offset, k.cy - offset))
     if fit.max_px > 0.05:
@@ -85,14 +106,16 @@ def _distortion(spec: CameraSpec, k: Intrinsics, convention: str) -> Distortion:
     return Distortion(model="plumb_bob", coefficients=fit.coefficients)
 
 
-def _warn_crop(spec: CameraSpec, coeffs: tuple[float, ...], center: tuple[float, float], convention: str) -> None:
-    """Gazebo crops a barrel-distorted image (k1 < 0) to hide its black border: say how much that magnifies it."""
-    if convention == "gazebo-classic" and spec.plugin is not None and not spec.plugin.border_crop:
+def _warn_crop(spec: CameraSpec, coeffs: tuple[float, ...], center: tuple[float, float], simulator: str | None) -> None:
+    """Gazebo crops a barrel-distorted image (k1 < 0) to hide its black border: say how much that magnifies it, with
+    the advice of the simulator the file is for (``None``: both)."""
+    if simulator == "gazebo-classic" and spec.plugin is not None and not spec.plugin.border_crop:
         return
     mx, my = crop_magnification((coeffs[0], coeffs[1], coeffs[2], coeffs[3], coeffs[4]), center)
     if max(mx, my) > 1.0005:
-        fix = ("set <borderCrop>false</borderCrop> in its gazebo_ros camera plugin" if convention == "gazebo-classic"
-               else "gz-sim has no switch for it")
+        classic = "set <borderCrop>false</borderCrop> in its gazebo_ros camera plugin"
+        fix = {"gazebo-classic": classic, "gz-sim": "gz-sim has no switch for it"}.get(
+            simulator or "", f"in Gazebo classic {classic}; gz-sim has no switch for it")
         logger.warning("camera %r: Gazebo crops its barrel-distorted image (k1 < 0), magnifying it %.4f x %.4f: the "
                        "rendered focal lengths are that much larger than these (%s)", spec.name, mx, my, fix)
 
@@ -105,13 +128,14 @@ def renders_as_link(spec: CameraSpec, *, tol_rad: float = 1e-3) -> bool:
     return float(np.linalg.norm(T[:3, 3])) < 1e-9 and math.acos(max(-1.0, min(1.0, cos_angle))) < tol_rad
 
 
-def _camera(spec: CameraSpec, convention: str) -> Camera:
+def _camera(spec: CameraSpec, convention: str, description: Description | None = None) -> Camera:
     k = intrinsics_for(spec.width, spec.height, spec.hfov_rad, convention, spec.lens)
     frame = spec.plugin.frame_name if spec.plugin and spec.plugin.frame_name else ""
     if not frame.endswith(OPTICAL_SUFFIXES):
         frame = spec.link if renders_as_link(spec) else f"{spec.link}_optical_frame"
     return Camera(width_px=spec.width, height_px=spec.height, fx_px=k.fx, fy_px=k.fy, cx_px=k.cx, cy_px=k.cy,
-                  skew=k.skew, distortion=_distortion(spec, k, convention), frame_id=frame)
+                  skew=k.skew, distortion=_distortion(spec, k, convention, _simulator(spec, description, convention)),
+                  frame_id=frame)
 
 
 def _simulation(spec: CameraSpec) -> SimulationSettings:
@@ -136,21 +160,25 @@ def _extrinsics(pair: StereoPair, path: Path) -> Extrinsics:
 
 
 def load_description_profile(
-    path: str | Path, *, convention: str = "gazebo-classic", left: str | None = None, right: str | None = None,
+    path: str | Path, *, convention: str | None = None, left: str | None = None, right: str | None = None,
     xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (), name: str | None = None,
-    allow_bad_baseline: bool = False,
+    allow_bad_baseline: bool = False, env: Mapping[str, str] | None = None,
 ) -> StereoProfile:
     """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors.
 
     Args:
         path: ``.urdf``, ``.xacro``, ``.urdf.xacro``, ``.sdf`` or ``.world`` file.
-        convention: pixel convention of the intrinsics: ``gazebo-classic``, ``gz-sim`` or ``exact``.
+        convention: pixel convention of the intrinsics: ``gazebo-classic``, ``gz-sim`` or ``exact``; None (default)
+            infers it from the simulator the file loads plugins of (:func:`choose_convention`), logs which and why,
+            and records it in the provenance.
         left, right: camera names (sensor, ``sensor/camera``, camera or link name) when not unambiguous.
         xacro_args: ``name:=value`` arguments of a xacro file.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
         name: profile name (default: the file name up to its first dot).
         allow_bad_baseline: write a pair that ``s2r lint`` calls an error (baseline along the optical axis,
             right camera on the left) with a warning instead of refusing it.
+        env: the values xacro's ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``, e.g.
+            Clearpath's ``JACKAL_BB2=1``); the machine's environment is never read. Recorded in the provenance.
 
     The optical axes come from the composed sensor poses (Gazebo renders along the camera frame's +x),
     never from link names. The pair's geometry follows the same rule as ``s2r lint``
@@ -161,11 +189,20 @@ def load_description_profile(
         file's sha256; simulation settings from ``<clip>``, ``<update_rate>`` and ``<noise>``.
     """
     source = Path(path)
-    check_convention(convention)
-    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths)
+    if convention is not None:
+        check_convention(convention)
+    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths, env=env)
     pair = stereo_pair(description, left=left, right=right)
     _check_geometry(description, pair, allow=allow_bad_baseline)
-    return profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args)
+    why = ""
+    if convention is None:
+        convention, why = choose_convention(description)
+    profile = profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args, env=env,
+                                convention_why=why)
+    log_notes(description)  # said once the profile stands: an error stays the only line
+    if why:
+        logger.warning("%s: pixel convention %s, %s (pass --convention to choose)", source, convention, why)
+    return profile
 
 
 def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
@@ -184,15 +221,22 @@ def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) 
 
 
 def profile_from_pair(description: Description, pair: StereoPair, *, convention: str = "gazebo-classic",
-                      name: str | None = None, xacro_args: Mapping[str, str] | None = None) -> StereoProfile:
-    """The sim profile of an already chosen pair (see :func:`load_description_profile`)."""
+                      name: str | None = None, xacro_args: Mapping[str, str] | None = None,
+                      env: Mapping[str, str] | None = None, convention_why: str = "") -> StereoProfile:
+    """The sim profile of an already chosen pair (see :func:`load_description_profile`); ``convention_why`` says
+    how the convention was chosen when it was not given (provenance notes)."""
     source = description.path
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
-    notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from horizontal_fov "
-             f"in the {convention} convention" + (f"; xacro args {args}" if args else ""))
+    passed = " ".join(f"{k}={v}" for k, v in sorted((env or {}).items()))
+    notes = "; ".join([f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from "
+                       f"horizontal_fov in the {convention} convention" + (f"; xacro args {args}" if args else "")
+                       + (f"; --env {passed}" if passed else ""),
+                       *([f"pixel convention {convention} {convention_why}"] if convention_why else []),
+                       *description.notes])
+    sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in [source, *description.included_files])
     try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
-        left_cam = _camera(pair.left, convention)
-        right_cam = _camera(pair.right, convention)
+        left_cam = _camera(pair.left, convention, description)
+        right_cam = _camera(pair.right, convention, description)
         extrinsics = _extrinsics(pair, source)
         baseline = float(sum(t * t for t in extrinsics.translation_m) ** 0.5)
         simulation = _simulation(pair.left)
@@ -203,9 +247,7 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
             matcher=seed_matcher(left_cam.fx_px, baseline, left_cam.width_px, far_limit_m=simulation.clip_far_m),
             simulation=simulation,
             provenance=Provenance(origin="sim", method=f"s2r profile from-urdf ({description.kind})",
-                                  convention=convention, sources=(SourceFile(path=str(source),
-                                                                             sha256=sha256_file(source)),),
-                                  notes=notes),
+                                  convention=convention, sources=sources, notes=notes),
         )
     except ValidationError as exc:
         first = exc.errors()[0]

@@ -14,7 +14,10 @@ from s2r.sources.description import CameraSpec, Description, FloatArray, JointSp
 from s2r.sources.sensors import camera_specs, parse_pose
 from s2r.sources.xmlparse import XmlDoc
 
-__all__ = ["parse_sdf"]
+__all__ = ["MAX_MODEL_NESTING", "parse_sdf"]
+
+#: Nested ``<model>`` levels read (real worlds nest a handful; the limit keeps recursion far from Python's).
+MAX_MODEL_NESTING = 64
 
 
 class _Collector:
@@ -25,7 +28,10 @@ class _Collector:
         self.cameras: list[CameraSpec] = []
         self.sdf_joints: list[tuple[str, ET.Element]] = []
 
-    def model(self, node: ET.Element, frame: str, T_frame_model: FloatArray, prefix: str) -> None:
+    def model(self, node: ET.Element, frame: str, T_frame_model: FloatArray, prefix: str, depth: int = 0) -> None:
+        if depth > MAX_MODEL_NESTING:
+            raise SourceError(f"models nested more than {MAX_MODEL_NESTING} deep", path=self.doc.path,
+                              field=f"<model> line {self.doc.line(node)}", hint="flatten the nested <model> elements")
         name = prefix + node.get("name", "model")
         model_frame = f"{name}::__model__"
         self.links[model_frame] = self.doc.line(node)
@@ -37,7 +43,7 @@ class _Collector:
         for joint in node.findall("joint"):
             self.sdf_joints.append((f"{name}::", joint))
         for inner in node.findall("model"):
-            self.model(inner, model_frame, parse_pose(self.doc, inner.find("pose")), f"{name}::")
+            self.model(inner, model_frame, parse_pose(self.doc, inner.find("pose")), f"{name}::", depth + 1)
 
     def link(self, node: ET.Element, model_frame: str, prefix: str, local: dict[str, ET.Element]) -> None:
         name = prefix + node.get("name", "")

@@ -1,11 +1,16 @@
-"""SDF ``<include>`` of ``model://NAME`` (and file) URIs, resolved the way Gazebo does, before the SDF is read.
+"""SDF ``<include>`` of ``model://NAME`` (and file) URIs, expanded the way Gazebo does, before the SDF is read.
 
 A ``model://NAME`` URI names a model folder ``NAME`` found in, in order: the ``--package-path`` folders,
 ``GZ_SIM_RESOURCE_PATH`` (gz-sim), ``IGN_GAZEBO_RESOURCE_PATH`` (older gz-sim) and ``GAZEBO_MODEL_PATH``
-(Gazebo classic), each a ``:``-separated list. The folder's ``model.config`` names the SDF file
-(``<sdf>model.sdf</sdf>``; default ``model.sdf``). The included ``<model>`` replaces the ``<include>``, renamed
-by the include's ``<name>`` and placed by its ``<pose>`` (which wins over the model's own). Fuel (https) URIs
-are not fetched: the error names the URI and what to do.
+(Gazebo classic), each a ``:``-separated list, then the description's own folder. The folder's ``model.config``
+names the SDF file (``<sdf>model.sdf</sdf>``; default ``model.sdf``). The included ``<model>`` replaces the
+``<include>``, renamed by the include's ``<name>`` and placed by its ``<pose>`` (which wins over the model's own).
+
+Where a URI may point and how much may be included is :mod:`s2r.sources.includes` (confined to those folders; a
+depth, file and byte budget over the whole expansion). The expansion runs in a child process under the same CPU,
+memory and wall-clock limits as xacro (:mod:`s2r.sources.isolation`). Includes that name nothing here (an unknown
+model, a web/Fuel URI) are left out and returned as :class:`SkippedInclude`: the caller decides whether the cameras
+asked for could be in them (:func:`s2r.sources.loader.stereo_pair`).
 """
 
 from __future__ import annotations
@@ -13,16 +18,48 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.errors import SourceError
-from s2r.fileio import read_text_file
+from s2r.sources.includes import IncludeBudget, MissingInclude, is_cameraless, resolve
+from s2r.sources.isolation import Limits, run_limited
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["MODEL_PATH_ENVS", "model_search_roots", "resolve_includes"]
+__all__ = ["INCLUDE_LIMITS", "MODEL_PATH_ENVS", "SkippedInclude", "expand_includes", "model_search_roots"]
 
 MODEL_PATH_ENVS = ("GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "GAZEBO_MODEL_PATH")
-_MAX_DEPTH = 8
+#: Resource limits of an SDF include expansion (the budget of :class:`IncludeBudget` stops it long before).
+INCLUDE_LIMITS = Limits(cpu_s=5, memory_bytes=1 << 30, wall_s=8.0)
+_LIMIT_HINT = "includes that fan out or nest without end; fix the file"
+
+
+@dataclass(frozen=True)
+class SkippedInclude:
+    """An include that names nothing reachable here, left out of the expansion.
+
+    ``message``, ``path``, ``field`` and ``hint`` are the error it is raised as when its models could hold a
+    camera that was asked for; ``cameraless`` when it names a standard model known to hold none (``model://sun``).
+    """
+
+    uri: str
+    message: str
+    path: str
+    field: str
+    hint: str
+    cameraless: bool
+
+    def error(self) -> SourceError:
+        """The error this include is when it cannot be skipped."""
+        return SourceError(self.message, path=self.path, field=self.field, hint=self.hint)
+
+
+@dataclass(frozen=True)
+class _Result:
+    root: ET.Element
+    lines: list[int | None]
+    included: list[Path]
+    skipped: list[SkippedInclude]
 
 
 def model_search_roots(package_paths: Sequence[Path] = ()) -> list[Path]:
@@ -33,80 +70,78 @@ def model_search_roots(package_paths: Sequence[Path] = ()) -> list[Path]:
     return roots
 
 
-def _model_file(folder: Path) -> Path:
-    config = folder / "model.config"
-    if config.is_file():
+class _Expander:
+    def __init__(self, doc: XmlDoc, roots: Sequence[Path], budget: IncludeBudget) -> None:
+        self.lines = dict(doc.lines)
+        self.roots, self.budget = list(roots), budget
+        self.skipped: list[SkippedInclude] = []
+
+    def expand(self, element: ET.Element, file: Path) -> None:
+        """Replace every ``<include>`` below ``element`` (read from ``file``) by its model, recursively."""
+        parents = [p for p in element.iter() if any(c.tag == "include" for c in p)]
+        for parent in parents:
+            children: list[ET.Element] = []
+            for child in parent:
+                model = self.include(child, file) if child.tag == "include" else child
+                if model is not None:
+                    children.append(model)
+            parent[:] = children
+
+    def include(self, include: ET.Element, file: Path) -> ET.Element | None:
+        line = self.lines.get(id(include))
+        field = f"<include> line {line}" if line else "<include>"
+        uri = (include.findtext("uri") or "").strip()
+        if not uri:
+            raise SourceError("<include> has no <uri>", path=file, field=field, hint="add <uri>model://NAME</uri>")
         try:
-            root = ET.fromstring(read_text_file(config, error=SourceError))
-        except ET.ParseError:
-            root = None
-        names = [] if root is None else [(n.text or "").strip() for n in root.iter("sdf")]
-        for name in names:
-            if name and (folder / name).is_file():
-                return folder / name
-    return folder / "model.sdf"
+            path = resolve(uri, including_file=file, roots=self.roots, field=field, budget=self.budget)
+        except MissingInclude as exc:
+            self.skipped.append(SkippedInclude(uri=uri, message=exc.message, path=str(file), field=field,
+                                               hint=exc.hint or "", cameraless=is_cameraless(uri)))
+            return None
+        with self.budget.nested(path, including_file=file, field=field):
+            inner = parse_xml(self.budget.read(path, including_file=file, field=field), path)
+            self.lines.update(inner.lines)
+            model = inner.root if inner.root.tag == "model" else inner.root.find("model")
+            if model is None:
+                raise SourceError(f"included file {path.name!r} holds no <model>", path=file, field=field,
+                                  hint="include a model's SDF")
+            self.expand(model, path)
+        name, pose = include.findtext("name"), include.find("pose")
+        if name and name.strip():
+            model.set("name", name.strip())
+        if pose is not None:
+            for old in model.findall("pose"):
+                model.remove(old)
+            model.insert(0, pose)
+        return model
 
 
-def _locate(uri: str, base: Path, package_paths: Sequence[Path], doc: XmlDoc, line: int | None) -> Path:
-    where = f"<include> line {line}" if line else "<include>"
-    if uri.startswith(("http://", "https://")):
-        raise SourceError(f"cannot include {uri}: Fuel models are not downloaded", path=doc.path, field=where,
-                          hint="download the model and pass its parent folder with --package-path")
-    if uri.startswith("model://"):
-        name = uri[len("model://"):].strip("/")
-        head, _, rest = name.partition("/")
-        for root in model_search_roots(package_paths):
-            if (root / head).is_dir():
-                folder = root / head / rest if rest else root / head
-                return folder if folder.is_file() else _model_file(folder)
-        listed = ", ".join(MODEL_PATH_ENVS)
-        raise SourceError(f"model {head!r} ({uri}) not found in any model folder", path=doc.path, field=where,
-                          hint=f"pass --package-path DIR with the folder holding {head}/, or set one of {listed}")
-    path = Path(uri.removeprefix("file://"))
-    path = path if path.is_absolute() else base / path
-    if path.is_dir():
-        return _model_file(path)
-    if not path.is_file():
-        raise SourceError(f"included file {uri!r} not found", path=doc.path, field=where,
-                          hint="fix the <uri> or pass --package-path with the model folder")
-    return path
+def _expand(doc: XmlDoc, roots: Sequence[Path], budget: IncludeBudget) -> _Result:
+    expander = _Expander(doc, roots, budget)
+    with budget.top(doc.path):
+        expander.expand(doc.root, doc.path)
+    lines = [expander.lines.get(id(e)) for e in doc.root.iter()]
+    return _Result(doc.root, lines, list(budget.included), expander.skipped)
 
 
-def _included_model(path: Path, include: ET.Element, doc: XmlDoc, line: int | None) -> ET.Element:
-    inner = parse_xml(read_text_file(path, error=SourceError), path)
-    model = inner.root if inner.root.tag == "model" else inner.root.find("model")
-    if model is None:
-        raise SourceError(f"included file {path} holds no <model>", path=doc.path,
-                          field=f"<include> line {line}" if line else "<include>")
-    doc.lines.update(inner.lines)
-    resolve_includes(inner, path.parent, (), _depth=1)
-    doc.lines.update(inner.lines)
-    name, pose = include.findtext("name"), include.find("pose")
-    if name and name.strip():
-        model.set("name", name.strip())
-    if pose is not None:
-        for old in model.findall("pose"):
-            model.remove(old)
-        model.insert(0, pose)
-    return model
+def expand_includes(doc: XmlDoc, package_paths: Sequence[Path] = (), *,
+                    budget: IncludeBudget | None = None) -> tuple[list[Path], list[SkippedInclude]]:
+    """Replace every ``<include>`` of ``doc`` (an SDF, modified in place) by the ``<model>`` it names.
 
+    Returns:
+        (the files read, in order; the includes left out because they name nothing here).
 
-def resolve_includes(doc: XmlDoc, base: Path, package_paths: Sequence[Path] = (), *, _depth: int = 0) -> None:
-    """Replace every ``<include>`` of ``doc`` (an SDF) by the ``<model>`` it names, recursively; SourceError naming
-    the include's line when a URI cannot be resolved."""
-    if _depth > _MAX_DEPTH:
-        raise SourceError("includes nested too deeply (a model including itself?)", path=doc.path, field="<include>")
-    parents = [p for p in doc.root.iter() if p.find("include") is not None]
-    for parent in parents:
-        for index, include in enumerate(list(parent)):
-            if include.tag != "include":
-                continue
-            line = doc.line(include)
-            uri = (include.findtext("uri") or "").strip()
-            if not uri:
-                raise SourceError("<include> has no <uri>", path=doc.path, field=f"<include> line {line}")
-            path = _locate(uri, base, package_paths, doc, line)
-            model = _included_model(path, include, doc, line)
-            resolve_includes(XmlDoc(model, path, doc.lines), path.parent, package_paths, _depth=_depth + 1)
-            parent.remove(include)
-            parent.insert(index, model)
+    Raises:
+        SourceError: an include without a URI, outside the allowed folders, including itself, over the budget,
+            over the resource limits, or naming a file without a ``<model>``.
+    """
+    if not any(e.tag == "include" for e in doc.root.iter()):
+        return [], []
+    roots = [*model_search_roots(package_paths), doc.path.resolve().parent]
+    spent = budget or IncludeBudget()
+    result = run_limited(lambda: _expand(doc, roots, spent), path=doc.path, what="SDF include expansion",
+                         limits=INCLUDE_LIMITS, field="<include>", hint=_LIMIT_HINT)
+    doc.root = result.root
+    doc.lines = {id(e): line for e, line in zip(result.root.iter(), result.lines, strict=True) if line is not None}
+    return result.included, result.skipped

@@ -24,7 +24,7 @@ SHIPPED: dict[str, tuple[str, str]] = {
 
 
 def _shipped(source: str, name: str, root: Path) -> StereoProfile:
-    profile = load_description_profile(root / source, name=name)
+    profile = load_description_profile(root / source, name=name, convention="gazebo-classic")  # both gazebo_ros rigs
     sources = tuple(s.model_copy(update={"path": source}) for s in profile.provenance.sources)
     provenance = profile.provenance.model_copy(update={"sources": sources, "created": SHIPPED_CREATED})
     return profile.model_copy(update={"provenance": provenance})

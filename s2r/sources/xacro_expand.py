@@ -16,14 +16,17 @@ import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from s2r.errors import SourceError
+from s2r.fileio import MAX_TEXT_BYTES, read_regular_file
 from s2r.sources.isolation import Limits, run_limited
 from s2r.sources.xacro_sandbox import UnsafeXacro, sandbox
 
-__all__ = ["PACKAGE_PATH_ENV", "expand_xacro", "find_package", "is_xacro", "package_search_roots"]
+__all__ = ["PACKAGE_PATH_ENV", "XacroExpansion", "expand_xacro", "expand_xacro_files", "find_package", "is_xacro",
+           "package_search_roots"]
 
 PACKAGE_PATH_ENV = "ROS_PACKAGE_PATH"
 _MAX_DEPTH = 3
@@ -117,10 +120,31 @@ def _root_cause(exc: BaseException) -> BaseException:
     return current  # type: ignore[no-any-return]
 
 
+@dataclass(frozen=True)
+class XacroExpansion:
+    """A xacro expansion: the XML text, and the files ``<xacro:include>`` read with their text (path, text)."""
+
+    text: str
+    included: tuple[tuple[str, str], ...] = ()
+
+    def macro_names(self, source_text: str = "") -> set[str]:
+        """Names of the macros ``source_text`` (the top file) and every included file define."""
+        texts = [source_text, *(text for _, text in self.included)]
+        return {name for text in texts for name in re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)[\"']", text)}
+
+
 def expand_xacro(
     path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (),
-    limits: Limits | None = None,
+    limits: Limits | None = None, env: Mapping[str, str] | None = None,
 ) -> str:
+    """Expand the xacro file ``path`` to URDF/SDF XML text: :func:`expand_xacro_files` without the included files."""
+    return expand_xacro_files(path, xacro_args=xacro_args, package_paths=package_paths, limits=limits, env=env).text
+
+
+def expand_xacro_files(
+    path: Path, *, xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (),
+    limits: Limits | None = None, env: Mapping[str, str] | None = None,
+) -> XacroExpansion:
     """Expand the xacro file ``path`` to URDF/SDF XML text, in a child process under ``limits``.
 
     Args:
@@ -128,6 +152,8 @@ def expand_xacro(
         xacro_args: ``<xacro:arg>`` values, as ``name:=value`` on the xacro command line.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
         limits: CPU, memory and wall-clock limits of the expansion (default :class:`Limits`).
+        env: what ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``); the machine's own
+            environment is never read.
 
     Raises:
         SourceError: unresolved ``$(find)``, an undefined argument, a refused expression, a limit overrun,
@@ -135,16 +161,20 @@ def expand_xacro(
     """
     mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
     paths = tuple(Path(p) for p in package_paths)
-    return run_limited(lambda: _expand_here(Path(path), mappings, paths), path=Path(path),
+    values = {str(k): str(v) for k, v in (env or {}).items()}
+    return run_limited(lambda: _expand_here(Path(path), mappings, paths, values), path=Path(path),
                        what="xacro expansion", limits=limits or Limits())
 
 
-def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[Path]) -> str:
-    """:func:`expand_xacro` in this process (the sandbox applies; no resource limits)."""
+def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[Path],
+                 env: Mapping[str, str] | None = None) -> XacroExpansion:
+    """:func:`expand_xacro_files` in this process (the sandbox applies; no resource limits)."""
     import xacro
 
+    included: list[str] = []
     try:
-        with _find_resolver(package_paths), sandbox(Path(path), package_paths), _quiet_xacro():
+        with _find_resolver(package_paths), sandbox(Path(path), package_paths, env=env, included=included), \
+                _quiet_xacro():
             doc = xacro.process_file(str(Path(path).resolve()), mappings=mappings)
     except Exception as exc:  # xacro raises XacroException, ExpatError, NameError, ...
         cause = _root_cause(exc)
@@ -161,7 +191,19 @@ def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[P
                               hint="README 'Hostile input' lists what a xacro may do") from None
         raise SourceError(f"xacro expansion failed: {_safe_detail(exc, cause)}", path=path, field="xacro",
                           hint="fix the xacro file or pass the missing name:=value arguments") from None
-    return str(doc.toprettyxml(indent="  "))
+    return XacroExpansion(str(doc.toprettyxml(indent="  ")), tuple(_texts(included)))
+
+
+def _texts(paths: Sequence[str]) -> list[tuple[str, str]]:
+    """(path, text) of each file once (xacro read them already: the sandbox allowed them)."""
+    out: dict[str, str] = {}
+    for name in paths:
+        if name not in out:
+            try:
+                out[name] = read_regular_file(name, limit=MAX_TEXT_BYTES).decode("utf-8", errors="replace")
+            except (OSError, ValueError):
+                continue
+    return list(out.items())
 
 
 def _safe_detail(exc: BaseException, cause: BaseException) -> str:

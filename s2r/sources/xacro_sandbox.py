@@ -16,13 +16,18 @@ a profile, so while s2r expands a xacro (:func:`sandbox`):
   calls (methods, ``type``, ``vars``, ``map``...), keyword arguments, ``str.format``, comprehensions,
   generators, lambdas, ``:=``, ``*args``. In ``$(eval ...)`` Python's builtins are visible, so there every
   builtin name but the allowed calls is refused as well;
+- names are checked, and so are the objects behind them: when an expression is evaluated, every function it
+  calls must BE one of the allowed functions (:func:`check_callees`, by identity), so a property or macro parameter
+  named ``len`` bound to ``'-'.join`` or ``map`` is refused; and no expression may evaluate to a function or class,
+  so a property can never hold something to call;
 - ``xacro.load_yaml`` and ``<xacro:include>`` read only files under the description's folder (or its ROS
   package, the nearest folder above holding a ``package.xml``) and the package folders (``--package-path``,
   ``ROS_PACKAGE_PATH``);
 - a file (the description or an include) holding ``<!DOCTYPE`` is refused: no entity expansion;
-- ``$(env NAME)`` and ``$(optenv NAME default)`` never read the environment: ``env`` is refused (pass the
-  value as ``NAME:=value``), ``optenv`` takes its default. A profile thus depends on the files and the
-  arguments given, not on the machine's environment, and no environment value reaches an output.
+- ``$(env NAME)`` and ``$(optenv NAME default)`` never read the machine's environment. They see only the values
+  passed explicitly (``--env NAME=VALUE``: Clearpath robots switch accessories on with ``JACKAL_BB2=1``):
+  ``env`` of a name not passed is refused, ``optenv`` of one takes its default. A profile thus depends on the
+  files and the values given, not on the machine's environment, and no other environment value reaches an output.
 """
 
 from __future__ import annotations
@@ -30,12 +35,12 @@ from __future__ import annotations
 import ast
 import builtins
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["UnsafeXacro", "check_expression", "check_no_doctype", "sandbox"]
+__all__ = ["UnsafeXacro", "allowed_functions", "check_callees", "check_expression", "check_no_doctype", "sandbox"]
 
 _MATH = frozenset(k for k in vars(math) if not k.startswith("_"))
 _PLAIN_CALLS = frozenset({"abs", "len", "min", "max", "round", "sum", "int", "float", "str", "bool", "list",
@@ -127,6 +132,54 @@ def check_expression(text: str, *, builtins_visible: bool = False) -> None:
             _check_call(node)
 
 
+def allowed_functions(symbols: Mapping[str, Any]) -> list[Any]:
+    """The function objects an expression may call: xacro's global ``symbols`` bound to the allowed call names
+    (directly and in the ``math`` / ``python`` / ``xacro`` namespaces) and the allowed Python builtins."""
+    found: list[Any] = [getattr(builtins, name) for name in _PLAIN_CALLS]
+    found += [v for name in _CALLS if callable(v := symbols.get(name))]
+    for space, names in _NAMESPACES.items():
+        table = symbols.get(space)
+        if isinstance(table, Mapping):
+            found += [v for name in names if callable(v := table.get(name))]
+    return found
+
+
+def _callee(node: ast.expr, symbols: Mapping[str, Any]) -> tuple[bool, Any]:
+    """(found, object) a call's function name refers to in ``symbols`` (a xacro symbol table); (False, None)
+    when the name is unbound (eval then reports the NameError itself)."""
+    try:
+        if isinstance(node, ast.Name):
+            return True, symbols[node.id]
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+            return True, symbols[node.value.id][node.attr]
+    except (KeyError, TypeError, AttributeError):
+        return False, None
+    return False, None
+
+
+def check_callees(text: str, symbols: Mapping[str, Any], allowed: Sequence[Any]) -> None:
+    """Raise :class:`UnsafeXacro` unless every function ``text`` calls IS one of ``allowed`` (by identity): a
+    property or macro parameter named ``len`` bound to ``'-'.join`` or ``map`` is not the builtin ``len``."""
+    tree = ast.parse(text.strip(), mode="eval")
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call):
+            continue
+        found, obj = _callee(node.func, symbols)
+        if found and not any(obj is fn for fn in allowed):
+            name = ast.unparse(node.func)[:60]
+            raise UnsafeXacro(f"calling {name!r} is refused: that name is bound to a {type(obj).__name__}, not the "
+                              "allowed function (a property or parameter shadows it)")
+
+
+def _not_callable(value: Any, expr: Any) -> Any:
+    """``value``, unless it is a function or class: a property must hold data, never something to call."""
+    if callable(value):
+        shown = str(expr).strip()[:60]
+        raise UnsafeXacro(f"expression {shown!r} evaluates to a function ({type(value).__name__}): a property or "
+                          "argument must hold a value, not a function")
+    return value
+
+
 def _inside(path: Path, roots: Sequence[Path]) -> bool:
     return any(path == root or root in path.parents for root in roots)
 
@@ -178,18 +231,30 @@ def _patched(obj: Any, name: str, value: Any) -> Iterator[None]:
             setattr(obj, name, saved)
 
 
-def _refuse_env(name: str) -> str:
-    raise UnsafeXacro(f"$(env {name}) is refused: s2r does not read the environment while expanding xacro "
-                      f"(pass the value as {name}:=value, or use $(arg {name}))")
+def _env_lookups(env: Mapping[str, str]) -> tuple[Callable[[str], str], Callable[..., str]]:
+    """``$(env NAME)`` and ``$(optenv NAME default)`` answered from ``env`` (the ``--env`` values) only."""
 
+    def env_value(name: str) -> str:
+        if name in env:
+            return env[name]
+        raise UnsafeXacro(f"$(env {name}) is refused: s2r does not read the environment while expanding xacro, "
+                          f"only --env values (pass --env {name}=VALUE)")
 
-def _optenv_default(name: str, default: str = "") -> str:
-    return default
+    def optenv_value(name: str, default: str = "") -> str:
+        return env.get(name, default)
+
+    return env_value, optenv_value
 
 
 @contextmanager
-def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
-    """Expand xacro within this block under the rules of the module docstring (patches the ``xacro`` module)."""
+def sandbox(description: Path, package_paths: Sequence[Path], *, env: Mapping[str, str] | None = None,
+            included: list[str] | None = None) -> Iterator[None]:
+    """Expand xacro within this block under the rules of the module docstring (patches the ``xacro`` module).
+
+    ``env``: the values ``$(env NAME)`` / ``$(optenv NAME default)`` see (``--env NAME=VALUE``); nothing else.
+    ``included``: when given, the path of every file ``<xacro:include>`` reads is appended to it.
+    """
+    env_value, optenv_value = _env_lookups(dict(env or {}))
     import xacro
     from xacro import substitution_args as subst
 
@@ -200,14 +265,17 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
     load_yaml: Callable[..., Any] = xacro.load_yaml
     include_files: Callable[..., Any] = xacro.get_include_files
 
-    def checked_eval(expr: Any, *args: Any, **kwargs: Any) -> Any:
+    allowed: list[Any] = []  # the allowed functions themselves, filled once the patches below are in place
+
+    def checked_eval(expr: Any, symbols: Any, *args: Any, **kwargs: Any) -> Any:
         if isinstance(expr, str):
             check_expression(expr)
-        return safe_eval(expr, *args, **kwargs)
+            check_callees(expr, symbols, allowed)
+        return _not_callable(safe_eval(expr, symbols, *args, **kwargs), expr)
 
     def checked_subst_eval(expr: str, context: Any) -> Any:
         check_expression(expr, builtins_visible=True)
-        return subst_eval(expr, context)
+        return _not_callable(subst_eval(expr, context), expr)
 
     def checked_load_yaml(filename: Any) -> Any:
         return load_yaml(_checked_file(xacro.abs_filename_spec(str(filename)), roots, "load_yaml of"))
@@ -215,6 +283,8 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
     def checked_includes(spec: Any, symbols: Any) -> Iterator[str]:
         for name in include_files(spec, symbols):
             check_no_doctype(_checked_file(name, roots, "include of"))
+            if included is not None:
+                included.append(name)
             yield name
 
     symbols = xacro._global_symbols
@@ -223,8 +293,9 @@ def sandbox(description: Path, package_paths: Sequence[Path]) -> Iterator[None]:
             (xacro, "safe_eval", checked_eval), (subst, "_eval", checked_subst_eval),
             (xacro, "get_include_files", checked_includes),
             (symbols, "load_yaml", checked_load_yaml), (symbols["xacro"], "load_yaml", checked_load_yaml),
-            (subst, "_eval_env", _refuse_env), (subst, "_eval_optenv", _optenv_default),
-            (subst._eval_dict, "env", _refuse_env), (subst._eval_dict, "optenv", _optenv_default),
+            (subst, "_eval_env", env_value), (subst, "_eval_optenv", optenv_value),
+            (subst._eval_dict, "env", env_value), (subst._eval_dict, "optenv", optenv_value),
         ):
             stack.enter_context(_patched(obj, name, value))
+        allowed.extend(allowed_functions(symbols))
         yield
