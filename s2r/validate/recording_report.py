@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import html
 from typing import TYPE_CHECKING, Any
 
-from s2r.htmlreport import ReportSection, html_table
+from s2r.htmlreport import ReportSection, html_fragment, html_table
 from s2r.quality.report import quality_sections
 from s2r.validate.recording import RecordingComparison
 
@@ -16,6 +15,9 @@ __all__ = ["recording_lines", "recording_section", "recording_sections"]
 
 _HEADERS = ("bin m", "frames real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real", "sim",
             "sub-pixel RMS px real", "sim", "fill % real", "sim", "verdict")
+
+_EXTRA = ("<h3>{{ title }}</h3>{% for p in notes %}<p class='note'>{{ p }}</p>{% endfor %}"
+          "{% for t in tables %}{{ t }}{% endfor %}")
 
 
 def _f(value: float | None, digits: int = 2) -> str:
@@ -64,6 +66,5 @@ def recording_section(result: ValidationResult) -> ReportSection | None:
     parts = recording_sections(result.recording)
     head = parts[0]
     for extra in parts[1:]:
-        notes = "".join(f"<p class='note'>{p}</p>" for p in extra.paragraphs)
-        head.tables.append(f"<h3>{html.escape(extra.title)}</h3>{notes}" + "".join(extra.tables))
+        head.tables.append(html_fragment(_EXTRA, title=extra.title, notes=extra.paragraphs, tables=extra.tables))
     return head
