@@ -114,5 +114,5 @@ class ProgressBar:
         filled = int(self.width * done / total)
         bar = "#" * filled + "-" * (self.width - filled)
         end = "\n" if done >= total else ""
-        sys.stderr.write(f"\r{label:<18} [{bar}] {done}/{total}{end}")
+        getattr(sys.stderr, "write_raw", sys.stderr.write)(f"\r{label:<18} [{bar}] {done}/{total}{end}")
         sys.stderr.flush()

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
-from s2r.errors import CalibrationError
+from s2r.errors import CalibrationError, terminal_safe
 from s2r.fileio import check_output_free, prepare_output_dir
 
 __all__ = ["register"]
@@ -225,4 +225,4 @@ def _print_summary(result: Any, out: Path) -> None:
             + " px (* used)")
     for d in figures["dropped"]:
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
-        print(f"  skipped {d['name']}{rms}: {d['reason']}")
+        print(f"  skipped {terminal_safe(d['name'])}{rms}: {terminal_safe(d['reason'])}")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from s2r.errors import terminal_safe
 from s2r.htmlreport import ReportSection, html_fragment, html_table
 from s2r.quality.report import quality_sections
 from s2r.validate.recording import RecordingComparison
@@ -37,7 +38,8 @@ def recording_lines(comparison: RecordingComparison) -> list[str]:
     """Terminal lines: one side-by-side row per distance bin."""
     real_n = sum(f.distance_m is not None for f in comparison.real.frames)
     sim_n = sum(f.distance_m is not None for f in comparison.sim.frames)
-    lines = [f"Recording {comparison.folder}: real camera on {real_n}/{len(comparison.real.frames)} boards, sim on "
+    lines = [f"Recording {terminal_safe(comparison.folder)}: real camera on {real_n}/{len(comparison.real.frames)} "
+             "boards, sim on "
              f"{sim_n} renders of the same poses (Intel's metrics on each board's PnP plane):"]
     rows = [_row(r) for r in comparison.rows]
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(_HEADERS)]
