@@ -28,7 +28,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.fileio import atomic_write_text
+from s2r.fileio import OutputBatch, atomic_write_text
 
 __all__ = [
     "CONTENT_SECURITY_POLICY",
@@ -197,6 +197,10 @@ def render_report(title: str, sections: Sequence[ReportSection], *, subtitle: st
 
 
 def write_report(path: str | Path, title: str, sections: Sequence[ReportSection], *,
-                 subtitle: str = "", force: bool = False) -> Path:
-    """Write the report atomically to ``path`` (refusing to overwrite unless ``force``)."""
-    return atomic_write_text(path, render_report(title, sections, subtitle=subtitle), force=force)
+                 subtitle: str = "", force: bool = False, batch: OutputBatch | None = None) -> Path:
+    """Write the report atomically to ``path`` (refusing to overwrite unless ``force``), or stage it in
+    ``batch`` (published with the other files of that batch)."""
+    page = render_report(title, sections, subtitle=subtitle)
+    if batch is not None:
+        return batch.add_text(path, page)
+    return atomic_write_text(path, page, force=force)

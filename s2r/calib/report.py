@@ -24,6 +24,7 @@ from s2r.calib.mono import MonoCalibration
 from s2r.calib.report_plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
 from s2r.calib.stereo import StereoCalibration
 from s2r.calib.synth import board_object_points
+from s2r.fileio import OutputBatch
 from s2r.htmlreport import (
     ReportSection,
     figure_to_data_uri,
@@ -249,8 +250,9 @@ def calibration_sections(result: StereoCalibration | MonoCalibration) -> list[Re
 
 
 def write_calibration_report(result: StereoCalibration | MonoCalibration, path: Path, *,
-                             force: bool = False) -> Path:
-    """Write the HTML report to ``path`` (atomic; refuses to overwrite unless ``force``)."""
+                             force: bool = False, batch: OutputBatch | None = None) -> Path:
+    """Write the HTML report to ``path`` (atomic; refuses to overwrite unless ``force``), or stage it in
+    ``batch`` to be published with the profile."""
     name = result.profile.name
     return write_report(path, f"s2r calibration: {name}", calibration_sections(result),
-                        subtitle=result.profile.provenance.method, force=force)
+                        subtitle=result.profile.provenance.method, force=force, batch=batch)

@@ -90,7 +90,8 @@ def _cmd_boards(args: argparse.Namespace) -> int:
         right_gain=args.right_gain, target=target, cut_share=args.cut_share,
     )
     if args.target is not None:
-        atomic_write_text(result.out_dir / "target.yaml", args.target.read_text(encoding="utf-8"), force=True)
+        atomic_write_text(result.out_dir / "target.yaml", args.target.read_text(encoding="utf-8"), force=True,
+                          root=result.out_dir)
     if args.json:
         print_json({"out_dir": result.out_dir, "views": len(result.poses), "truth": result.truth_path})
     else:
