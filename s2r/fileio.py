@@ -20,6 +20,7 @@ from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
     "MAX_TEXT_BYTES",
+    "MAX_YAML_NODES",
     "TEMP_PREFIX",
     "NotARegularFile",
     "OutputBatch",
@@ -29,6 +30,7 @@ __all__ = [
     "atomic_write_text",
     "check_output_dir",
     "check_output_free",
+    "check_yaml_graph",
     "npy_bytes",
     "parse_yaml",
     "prepare_output_dir",
@@ -424,10 +426,63 @@ def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str
         raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
 
 
+#: Most nodes a YAML document may expand to, every alias counted as a copy of its anchor's nodes (the largest
+#: calibration files s2r reads hold a few thousand numbers).
+MAX_YAML_NODES = 1_000_000
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [n for pair in node.value for n in pair]
+    return []
+
+
+def check_yaml_graph(root: yaml.Node, *, limit: int = MAX_YAML_NODES) -> None:
+    """Refuse a composed YAML graph that contains itself (``&r [1.0, *r]``) or that expands to more than
+    ``limit`` nodes through aliases (a "billion laughs" bomb: 9 levels of 10 aliases in 2.6 kB is 10^9).
+
+    Walks the graph once (shared nodes are sized once), without recursion.
+
+    Raises:
+        yaml.composer.ComposerError: naming the line of the offending node.
+    """
+    sizes: dict[int, int] = {}
+    entered: set[int] = set()
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, leaving = stack.pop()
+        key = id(node)
+        if leaving:
+            sizes[key] = 1 + sum(sizes[id(child)] for child in _children(node))
+            if sizes[key] > limit:
+                raise yaml.composer.ComposerError(
+                    None, None, f"aliases expand to more than {limit} nodes (an alias bomb?)", node.start_mark)
+            continue
+        if key in sizes:
+            continue
+        if key in entered:
+            raise yaml.composer.ComposerError(None, None, "recursive alias: a node that contains itself",
+                                              node.start_mark)
+        entered.add(key)
+        stack.append((node, True))
+        stack.extend((child, False) for child in _children(node))
+
+
 class StrictSafeLoader(yaml.SafeLoader):
     """PyYAML's safe loader, stricter: a key repeated in one mapping is an error (naming the key and its line,
-    instead of the last one silently winning), and the object-building tags ``!!binary !!set !!omap !!pairs
-    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built)."""
+    instead of the last one silently winning), the object-building tags ``!!binary !!set !!omap !!pairs
+    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built), and a
+    document whose aliases recurse or expand past :data:`MAX_YAML_NODES` nodes is refused before it is built
+    (:func:`check_yaml_graph`)."""
+
+    def compose_document(self) -> yaml.Node | None:
+        """The document's node graph, checked by :func:`check_yaml_graph`."""
+        node = super().compose_document()
+        if node is not None:
+            check_yaml_graph(node)
+        return node
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
         """The mapping of ``node``; ConstructorError on a duplicate key."""
