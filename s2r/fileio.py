@@ -15,10 +15,12 @@ from xml.parsers import expat
 
 import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
+    "MAX_NPY_BYTES",
     "MAX_TEXT_BYTES",
     "MAX_YAML_NODES",
     "TEMP_PREFIX",
@@ -34,6 +36,7 @@ __all__ = [
     "npy_bytes",
     "parse_yaml",
     "prepare_output_dir",
+    "read_npy",
     "read_regular_file",
     "read_text_file",
     "run_xml_parser",
@@ -408,6 +411,54 @@ def read_regular_file(path: str | Path, *, limit: int) -> bytes:
         return data
     finally:
         os.close(fd)
+
+
+#: Largest ``.npy`` array read (bytes of data): a 4K float64 depth image is 66 MB.
+MAX_NPY_BYTES = 256 << 20
+
+
+def read_npy(path: str | Path, *, limit: int = MAX_NPY_BYTES) -> NDArray[Any]:
+    """A ``.npy`` array of plain numbers, checked from its header before any allocation.
+
+    The file must be a regular file (no FIFO or device: opened without blocking, checked with ``fstat``); its
+    header (format 1.0 or 2.0) must declare a bool, integer or float dtype (no objects, no pickles), a shape
+    whose data is at most ``limit`` bytes, and the file must hold that much data. Only the declared data is
+    read, so a sparse multi-gigabyte file with a small header costs nothing.
+
+    Raises:
+        NotARegularFile: a device, FIFO or socket.
+        ValueError: a malformed header, a refused dtype, a shape over ``limit`` or a truncated file.
+        OSError: missing, unreadable, a folder.
+    """
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+        if not stat.S_ISREG(info.st_mode):
+            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+        version = np.lib.format.read_magic(handle)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(handle)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(handle)
+        else:
+            raise ValueError(f".npy format version {version[0]}.{version[1]} is not supported (1.0 or 2.0)")
+        if dtype.hasobject or dtype.kind not in "biuf" or dtype.subdtype is not None:
+            raise ValueError(f"dtype {dtype} is not plain numbers")
+        count = 1
+        for side in shape:
+            count *= int(side)
+        nbytes = count * dtype.itemsize
+        if nbytes > limit:
+            raise ValueError(f"shape {shape} of {dtype} is {nbytes} bytes, over the {limit >> 20} MiB s2r reads")
+        if handle.tell() + nbytes > info.st_size:
+            raise ValueError(f"truncated: shape {shape} of {dtype} needs {nbytes} bytes of data")
+        buffer = bytearray(nbytes)
+        if handle.readinto(buffer) != nbytes:
+            raise ValueError("truncated while read")
+    array = np.frombuffer(buffer, dtype=dtype)
+    return array.reshape(shape, order="F" if fortran else "C")
 
 
 def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str:
