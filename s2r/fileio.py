@@ -113,6 +113,11 @@ def _check_below_root(root: Path, out: Path) -> None:
         rel = out.relative_to(root)
     except ValueError:
         raise S2RError("is outside the output folder", path=out, hint=f"write inside {root}") from None
+    if len(rel.parts) > 1 and _lstat(root) is None:
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise _cannot_write(root, exc) from None
     current = root
     for part in rel.parts[:-1]:
         if part in ("..", "."):
