@@ -28,8 +28,10 @@ def _limits(file_size: int | None) -> Callable[[], None]:
     return apply
 
 
-def run_s2r(*argv: str, file_size: int | None = None, cwd: str | None = None) -> subprocess.CompletedProcess[str]:
-    """``python -m s2r ARGV`` under the bounds; raises ``subprocess.TimeoutExpired`` past :data:`TIMEOUT_S`."""
+def run_s2r(*argv: str, file_size: int | None = None, cwd: str | None = None,
+            timeout_s: float = TIMEOUT_S) -> subprocess.CompletedProcess[str]:
+    """``python -m s2r ARGV`` under the bounds; raises ``subprocess.TimeoutExpired`` past ``timeout_s`` (a
+    former hang; longer only for runs that do real work, such as a calibration on a loaded machine)."""
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
-    return subprocess.run([sys.executable, "-m", "s2r", *argv], capture_output=True, text=True, timeout=TIMEOUT_S,
+    return subprocess.run([sys.executable, "-m", "s2r", *argv], capture_output=True, text=True, timeout=timeout_s,
                           check=False, env=env, cwd=cwd, preexec_fn=_limits(file_size))

@@ -110,8 +110,10 @@ def test_full_disk_on_the_calibration_report_leaves_no_profile(tmp_path: Path) -
     write_stereo_set(make_rig(name="r", width=320, height=240), tmp_path / "set", views=8, seed=3,
                      supersample=1)
     out, report = tmp_path / "rig.yaml", tmp_path / "report"
+    assert main(["-q", "calibrate", str(tmp_path / "set"), "-o", str(out), "--jobs", "1"]) == 0  # fills the cache
+    out.unlink()
     done = run_s2r("-q", "calibrate", str(tmp_path / "set"), "-o", str(out), "--report", str(report), "--jobs", "1",
-                   "--no-cache", file_size=64 << 10)
+                   file_size=64 << 10, timeout_s=60)
     assert done.returncode == 2, done.stderr
     assert "index.html: cannot write: File too large" in done.stderr and done.stderr.count("\n") == 1
     assert not out.exists() and list(report.iterdir()) == []
