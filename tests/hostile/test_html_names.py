@@ -13,7 +13,7 @@ import pytest
 
 from s2r.cli import main
 
-NAME = "<img src=x onerror=alert(1)><script>alert(2)</script>"
+NAME = "<img src=x onerror=alert(1)><svg onload=alert(2)><script>alert(3)"  # no "/": it is a file name
 
 
 class _Tags(HTMLParser):
@@ -40,7 +40,7 @@ def test_a_markup_file_name_is_text_in_the_depth_quality_report(tmp_path: Path,
     assert code == 0, capsys.readouterr().err
     parser = _Tags()
     parser.feed((report / "depth_quality.html").read_text(encoding="utf-8"))
-    assert [tag for tag, _ in parser.tags if tag in ("script", "img")] == []
+    assert [tag for tag, _ in parser.tags if tag in ("script", "img", "svg")] == []
     assert [name for _, attrs in parser.tags for name, _ in attrs if name.startswith("on")] == []
     assert f"{NAME}.npy" in parser.text
     assert any(tag == "meta" and ("http-equiv", "Content-Security-Policy") in attrs for tag, attrs in parser.tags)
