@@ -6,6 +6,7 @@ because the CLI prints ``str(error)`` as ``error: ...`` and exits 2 (no tracebac
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 __all__ = [
@@ -19,7 +20,22 @@ __all__ = [
     "S2RError",
     "SourceError",
     "ValidateError",
+    "terminal_safe",
 ]
+
+#: C0 controls (ESC, BEL, CR, LF, ...), DEL, C1 controls (CSI, OSC as single code points), the line and
+#: paragraph separators and the bidirectional overrides/isolates (which reorder what a terminal shows).
+_UNSAFE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+
+
+def terminal_safe(text: object, *, keep: str = "") -> str:
+    """``str(text)`` with every control character written as its Python escape (ESC as ``\\x1b``, a newline as
+    ``\\n``), so a file name can neither recolour nor retitle a terminal, nor forge a line of output.
+
+    ``keep`` lists control characters to pass through unchanged (``"\\n"`` for text that is several lines on
+    purpose). The one rule for every name s2r prints: error lines, log lines and the CLI's output streams.
+    """
+    return _UNSAFE.sub(lambda m: m.group() if m.group() in keep else ascii(m.group())[1:-1], str(text))
 
 
 class S2RError(Exception):
@@ -41,18 +57,18 @@ class S2RError(Exception):
         hint: str | None = None,
     ) -> None:
         self.message = message
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else terminal_safe(path)
         self.field = field
         self.hint = hint
         super().__init__(self.one_line())
 
     def one_line(self) -> str:
         """The error as ``path: field: message (hint)`` on a single line."""
-        parts = [p for p in (self.path, self.field) if p]
-        text = ": ".join([*parts, self.message])
+        text = " ".join(self.message.split())
         if self.hint:
-            text = f"{text} ({self.hint})"
-        return " ".join(text.split())
+            text = f"{text} ({' '.join(self.hint.split())})"
+        parts = [terminal_safe(p) for p in (self.path, self.field) if p]
+        return terminal_safe(": ".join([*parts, text]))
 
 
 class ProfileError(S2RError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import hashlib
 import io
@@ -14,20 +15,28 @@ from xml.parsers import expat
 
 import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from s2r.errors import OutputExistsError, S2RError
 
 __all__ = [
+    "MAX_NPY_BYTES",
     "MAX_TEXT_BYTES",
+    "MAX_YAML_NODES",
+    "TEMP_PREFIX",
     "NotARegularFile",
+    "OutputBatch",
     "StrictSafeLoader",
     "atomic_write_bytes",
     "atomic_write_npy",
     "atomic_write_text",
     "check_output_dir",
     "check_output_free",
+    "check_yaml_graph",
+    "npy_bytes",
     "parse_yaml",
     "prepare_output_dir",
+    "read_npy",
     "read_regular_file",
     "read_text_file",
     "run_xml_parser",
@@ -83,52 +92,69 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
     return out
 
 
-def _publish(tmp_name: str, out: Path, *, force: bool) -> None:
-    """Move the finished temporary file to ``out``: exclusively (hard link) unless ``force``, else by rename.
+#: Every temporary file or folder s2r creates starts with this: clean-ups only ever touch such names.
+TEMP_PREFIX = ".s2r-tmp-"
 
-    Without ``force`` the link fails when ``out`` appeared meanwhile (another run), so of two racing runs at
-    most one succeeds. Filesystems without hard links fall back to claiming the name with ``O_EXCL`` first.
+
+def _cannot_write(out: Path, exc: OSError) -> S2RError:
+    """The one-line error of a failed write (ENOSPC, EFBIG, EROFS, EACCES...): ``FILE: cannot write: REASON``."""
+    reason = exc.strerror or str(exc)
+    return S2RError(f"cannot write: {reason}; nothing was written", path=out,
+                    hint="free some space or choose a writable location")
+
+
+def _check_below_root(root: Path, out: Path) -> None:
+    """Refuse ``out`` unless every folder between ``root`` (exclusive) and ``out`` is missing or a real folder.
+
+    A symlink there (``R/left`` -> elsewhere) would carry the write outside the output: refused, even with
+    ``--force``. Missing folders are created one by one, each checked again after its creation.
     """
-    if force:
-        st = _lstat(out)
-        if st is not None:
-            _refuse_special(out, st)  # it may have changed since the first check
-        os.replace(tmp_name, out)
-        return
     try:
-        os.link(tmp_name, out)
-    except FileExistsError:
-        raise OutputExistsError("already exists (written by another run meanwhile?); nothing was overwritten",
-                                path=out, hint="pass --force to replace it") from None
-    except OSError as exc:
-        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
-            raise
+        rel = out.relative_to(root)
+    except ValueError:
+        raise S2RError("is outside the output folder", path=out, hint=f"write inside {root}") from None
+    if len(rel.parts) > 1 and _lstat(root) is None:
         try:
-            os.close(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600))
-        except FileExistsError:
-            raise OutputExistsError("already exists (written by another run meanwhile?); nothing was "
-                                    "overwritten", path=out, hint="pass --force to replace it") from None
-        os.replace(tmp_name, out)
-        return
-    os.unlink(tmp_name)
+            root.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise _cannot_write(root, exc) from None
+    current = root
+    for part in rel.parts[:-1]:
+        if part in ("..", "."):
+            raise S2RError("leaves the output folder", path=out, hint=f"write inside {root}")
+        current = current / part
+        st = _lstat(current)
+        if st is None:
+            try:
+                current.mkdir()
+            except FileExistsError:
+                pass
+            except OSError as exc:
+                raise _cannot_write(current, exc) from None
+            st = _lstat(current)
+        if st is None or stat.S_ISLNK(st.st_mode):
+            raise OutputExistsError("is a symbolic link inside the output folder; s2r does not write through links, "
+                                    "nothing was written, even with --force", path=current,
+                                    hint="remove the link or choose another output folder")
+        if not stat.S_ISDIR(st.st_mode):
+            raise OutputExistsError("is a file, expected a folder; nothing was written", path=current,
+                                    hint="choose another output folder")
 
 
-def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder, published atomically.
+def _write_temporary(out: Path, data: bytes) -> str:
+    """Write ``data`` to a new temporary file beside ``out`` (synced to disk); its name.
 
-    A crash mid-write leaves the old file (or no file), never a truncated one. Refuses (see
-    :func:`check_output_free`) symlinks and non-regular files always, an existing file unless ``force``; without
-    ``force`` the file is created exclusively, so two racing runs cannot both write it.
+    Any failure (no space, file too large, read-only, no permission) removes the temporary and raises the
+    one-line ``FILE: cannot write: REASON``.
     """
-    out = check_output_free(path, force=force)
     parent = out.parent if str(out.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
+        fd, tmp_name = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".tmp", dir=parent)
     except FileExistsError:
         raise S2RError("is a file, expected a folder", path=parent, hint="choose an output folder") from None
     except OSError as exc:
-        raise S2RError(f"cannot write: {exc.strerror}", path=out, hint="choose a writable location") from exc
+        raise _cannot_write(out, exc) from None
     try:
         # mkstemp creates 0600 files; give the output the permissions a plain open() would (0666 & ~umask).
         umask = os.umask(0)
@@ -138,16 +164,159 @@ def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False) ->
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        _publish(tmp_name, out, force=force)
+    except OSError as exc:
+        Path(tmp_name).unlink(missing_ok=True)
+        raise _cannot_write(out, exc) from None
     except BaseException:
         Path(tmp_name).unlink(missing_ok=True)
         raise
-    return out
+    return tmp_name
 
 
-def atomic_write_text(path: str | Path, text: str, *, force: bool = False) -> Path:
+class OutputBatch:
+    """Output files written to temporaries beside their final names, then published together or not at all.
+
+    Use as a context manager: :meth:`add_bytes` / :meth:`add_text` write each file's temporary (a full disk shows
+    there, as ``FILE: cannot write: REASON``, before anything is published); :meth:`publish` checks every final
+    name again, then moves them all into place. When a move fails, the ones already moved are undone (a
+    replaced file is restored from a hard-linked backup). Leaving the block without publishing removes every
+    temporary.
+
+    Args:
+        force: replace existing regular files (never links, folders or special files).
+        root: the output folder; every folder between it and a file must be a real folder (a symlinked
+            ``R/left`` is refused), and files outside it are refused.
+    """
+
+    def __init__(self, *, force: bool, root: str | Path | None = None) -> None:
+        self.force = force
+        self.root = None if root is None else Path(root)
+        self._staged: list[tuple[str, Path]] = []
+
+    def __enter__(self) -> OutputBatch:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.discard()
+
+    def _check(self, path: str | Path) -> Path:
+        out = Path(path)
+        if self.root is not None:
+            _check_below_root(self.root, out)
+        return check_output_free(out, force=self.force)
+
+    def add_bytes(self, path: str | Path, data: bytes) -> Path:
+        """Stage ``data`` for ``path`` (checked now and again at :meth:`publish`); returns ``path``."""
+        out = self._check(path)
+        if any(staged == out for _, staged in self._staged):
+            raise ValueError(f"{out} is staged twice")
+        self._staged.append((_write_temporary(out, data), out))
+        return out
+
+    def add_text(self, path: str | Path, text: str) -> Path:
+        """UTF-8 text version of :meth:`add_bytes`."""
+        return self.add_bytes(path, text.encode("utf-8"))
+
+    def discard(self) -> None:
+        """Remove every temporary not yet published."""
+        for tmp_name, _ in self._staged:
+            Path(tmp_name).unlink(missing_ok=True)
+        self._staged.clear()
+
+    def publish(self) -> list[Path]:
+        """Move every staged file into place, all or none; the final paths in the order they were added."""
+        if self.root is not None:
+            for _, out in self._staged:
+                _check_below_root(self.root, out)  # the tree may have changed while the files were written
+        done: list[tuple[Path, str | None]] = []
+        try:
+            for tmp_name, out in self._staged:
+                done.append((out, _publish(tmp_name, out, force=self.force)))
+        except BaseException:
+            _undo(done)
+            raise
+        for _, backup in done:
+            if backup is not None:
+                Path(backup).unlink(missing_ok=True)
+        published = [out for _, out in self._staged]
+        self.discard()
+        return published
+
+
+def _undo(done: list[tuple[Path, str | None]]) -> None:
+    """Take back published files: restore each replaced file from its backup, remove each new one."""
+    for out, backup in reversed(done):
+        with contextlib.suppress(OSError):
+            if backup is not None:
+                os.replace(backup, out)
+            else:
+                out.unlink()
+
+
+def _publish(tmp_name: str, out: Path, *, force: bool) -> str | None:
+    """Move the finished temporary file to ``out``: exclusively (hard link) unless ``force``, else by rename;
+    the name of a hard-linked backup of the file it replaced (None when there was none).
+
+    Without ``force`` the link fails when ``out`` appeared meanwhile (another run), so of two racing runs at
+    most one succeeds. Filesystems without hard links fall back to claiming the name with ``O_EXCL`` first.
+    """
+    try:
+        if force:
+            return _replace(tmp_name, out)
+        try:
+            os.link(tmp_name, out)
+        except FileExistsError:
+            raise OutputExistsError("already exists (written by another run meanwhile?); nothing was overwritten",
+                                    path=out, hint="pass --force to replace it") from None
+        except OSError as exc:
+            if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
+                raise
+            try:
+                os.close(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600))
+            except FileExistsError:
+                raise OutputExistsError("already exists (written by another run meanwhile?); nothing was "
+                                        "overwritten", path=out, hint="pass --force to replace it") from None
+            os.replace(tmp_name, out)
+            return None
+        os.unlink(tmp_name)
+        return None
+    except OSError as exc:
+        raise _cannot_write(out, exc) from None
+
+
+def _replace(tmp_name: str, out: Path) -> str | None:
+    """``os.replace`` the temporary onto ``out``, keeping a hard-linked backup of a replaced regular file."""
+    st = _lstat(out)
+    if st is None:
+        os.replace(tmp_name, out)
+        return None
+    _refuse_special(out, st)  # it may have changed since the first check
+    backup = f"{tmp_name}.bak"
+    try:
+        os.link(out, backup)
+    except OSError:
+        backup = ""
+    os.replace(tmp_name, out)
+    return backup or None
+
+
+def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False, root: str | Path | None = None) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, published atomically.
+
+    A crash mid-write leaves the old file (or no file), never a truncated one; a write error (full disk, file
+    too large, read-only) is ``FILE: cannot write: REASON`` with nothing written. Refuses (see
+    :func:`check_output_free`) symlinks and non-regular files always, an existing file unless ``force``; without
+    ``force`` the file is created exclusively, so two racing runs cannot both write it. With ``root``, every
+    folder between it and ``path`` must be a real folder, not a link.
+    """
+    with OutputBatch(force=force, root=root) as batch:
+        batch.add_bytes(path, data)
+        return batch.publish()[0]
+
+
+def atomic_write_text(path: str | Path, text: str, *, force: bool = False, root: str | Path | None = None) -> Path:
     """UTF-8 text version of :func:`atomic_write_bytes`."""
-    return atomic_write_bytes(path, text.encode("utf-8"), force=force)
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force, root=root)
 
 
 def check_output_dir(path: str | Path, *, force: bool) -> Path:
@@ -190,11 +359,16 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
     return out
 
 
-def atomic_write_npy(path: str | Path, array: Any, *, force: bool = False) -> Path:
-    """Write ``array`` as a ``.npy`` file (no pickles) through :func:`atomic_write_bytes`."""
+def npy_bytes(array: Any) -> bytes:
+    """``array`` as the bytes of a ``.npy`` file (no pickles)."""
     buffer = io.BytesIO()
     np.save(buffer, np.asarray(array), allow_pickle=False)
-    return atomic_write_bytes(path, buffer.getvalue(), force=force)
+    return buffer.getvalue()
+
+
+def atomic_write_npy(path: str | Path, array: Any, *, force: bool = False, root: str | Path | None = None) -> Path:
+    """Write ``array`` as a ``.npy`` file (no pickles) through :func:`atomic_write_bytes`."""
+    return atomic_write_bytes(path, npy_bytes(array), force=force, root=root)
 
 
 def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
@@ -244,6 +418,54 @@ def read_regular_file(path: str | Path, *, limit: int) -> bytes:
         os.close(fd)
 
 
+#: Largest ``.npy`` array read (bytes of data): a 4K float64 depth image is 66 MB.
+MAX_NPY_BYTES = 256 << 20
+
+
+def read_npy(path: str | Path, *, limit: int = MAX_NPY_BYTES) -> NDArray[Any]:
+    """A ``.npy`` array of plain numbers, checked from its header before any allocation.
+
+    The file must be a regular file (no FIFO or device: opened without blocking, checked with ``fstat``); its
+    header (format 1.0 or 2.0) must declare a bool, integer or float dtype (no objects, no pickles), a shape
+    whose data is at most ``limit`` bytes, and the file must hold that much data. Only the declared data is
+    read, so a sparse multi-gigabyte file with a small header costs nothing.
+
+    Raises:
+        NotARegularFile: a device, FIFO or socket.
+        ValueError: a malformed header, a refused dtype, a shape over ``limit`` or a truncated file.
+        OSError: missing, unreadable, a folder.
+    """
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+        if not stat.S_ISREG(info.st_mode):
+            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+        version = np.lib.format.read_magic(handle)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(handle)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(handle)
+        else:
+            raise ValueError(f".npy format version {version[0]}.{version[1]} is not supported (1.0 or 2.0)")
+        if dtype.hasobject or dtype.kind not in "biuf" or dtype.subdtype is not None:
+            raise ValueError(f"dtype {dtype} is not plain numbers")
+        count = 1
+        for side in shape:
+            count *= int(side)
+        nbytes = count * dtype.itemsize
+        if nbytes > limit:
+            raise ValueError(f"shape {shape} of {dtype} is {nbytes} bytes, over the {limit >> 20} MiB s2r reads")
+        if handle.tell() + nbytes > info.st_size:
+            raise ValueError(f"truncated: shape {shape} of {dtype} needs {nbytes} bytes of data")
+        buffer = bytearray(nbytes)
+        if handle.readinto(buffer) != nbytes:
+            raise ValueError("truncated while read")
+    array = np.frombuffer(buffer, dtype=dtype)
+    return array.reshape(shape, order="F" if fortran else "C")
+
+
 def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str:
     """A file's UTF-8 text; ``error`` (one line naming the file) when it is missing, unreadable, not a regular
     file or over :data:`MAX_TEXT_BYTES`."""
@@ -260,10 +482,63 @@ def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str
         raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
 
 
+#: Most nodes a YAML document may expand to, every alias counted as a copy of its anchor's nodes (the largest
+#: calibration files s2r reads hold a few thousand numbers).
+MAX_YAML_NODES = 1_000_000
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [n for pair in node.value for n in pair]
+    return []
+
+
+def check_yaml_graph(root: yaml.Node, *, limit: int = MAX_YAML_NODES) -> None:
+    """Refuse a composed YAML graph that contains itself (``&r [1.0, *r]``) or that expands to more than
+    ``limit`` nodes through aliases (a "billion laughs" bomb: 9 levels of 10 aliases in 2.6 kB is 10^9).
+
+    Walks the graph once (shared nodes are sized once), without recursion.
+
+    Raises:
+        yaml.composer.ComposerError: naming the line of the offending node.
+    """
+    sizes: dict[int, int] = {}
+    entered: set[int] = set()
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, leaving = stack.pop()
+        key = id(node)
+        if leaving:
+            sizes[key] = 1 + sum(sizes[id(child)] for child in _children(node))
+            if sizes[key] > limit:
+                raise yaml.composer.ComposerError(
+                    None, None, f"aliases expand to more than {limit} nodes (an alias bomb?)", node.start_mark)
+            continue
+        if key in sizes:
+            continue
+        if key in entered:
+            raise yaml.composer.ComposerError(None, None, "recursive alias: a node that contains itself",
+                                              node.start_mark)
+        entered.add(key)
+        stack.append((node, True))
+        stack.extend((child, False) for child in _children(node))
+
+
 class StrictSafeLoader(yaml.SafeLoader):
     """PyYAML's safe loader, stricter: a key repeated in one mapping is an error (naming the key and its line,
-    instead of the last one silently winning), and the object-building tags ``!!binary !!set !!omap !!pairs
-    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built)."""
+    instead of the last one silently winning), the object-building tags ``!!binary !!set !!omap !!pairs
+    !!python/...`` are refused (only maps, lists, strings, numbers, booleans, null and dates are built), and a
+    document whose aliases recurse or expand past :data:`MAX_YAML_NODES` nodes is refused before it is built
+    (:func:`check_yaml_graph`)."""
+
+    def compose_document(self) -> yaml.Node | None:
+        """The document's node graph, checked by :func:`check_yaml_graph`."""
+        node = super().compose_document()
+        if node is not None:
+            check_yaml_graph(node)
+        return node
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
         """The mapping of ``node``; ConstructorError on a duplicate key."""

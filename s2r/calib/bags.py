@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.bagfiles import bag_storage_files
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
 from s2r.calib.lens import DEFAULT_LENS
 from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
@@ -54,6 +55,7 @@ def open_bag(bag: Path, *, error: type[S2RError] = CalibrationError) -> Any:
 
     if not bag.exists():
         raise error("bag not found", path=bag, hint="check the path (a ROS 2 bag is a folder)")
+    bag_storage_files(bag, error=error)  # a FIFO would block rosbags for good: refused before it opens
     try:
         reader = AnyReader([bag])
         reader.open()
@@ -137,8 +139,7 @@ def paired_bag_frames(reader: Any, left_topic: str, right_topic: str, *, max_dt_
 
 
 def _bag_sources(bag: Path) -> list[SourceFile]:
-    files = sorted(p for p in bag.rglob("*") if p.is_file()) if bag.is_dir() else [bag]
-    return [SourceFile(path=str(p), sha256=sha256_file(p)) for p in files]
+    return [SourceFile(path=str(p), sha256=sha256_file(p)) for p in bag_storage_files(bag, error=CalibrationError)]
 
 
 def _check_topics(reader: Any, bag: Path, left_topic: str, right_topic: str) -> int:

@@ -20,8 +20,8 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import math
-import time
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib import cache
 from s2r.errors import S2RError
 from s2r.executor import local_pool
 from s2r.fileio import atomic_write_text
@@ -51,6 +52,8 @@ __all__ = [
     "detect_stream",
     "refine_window",
 ]
+
+log = logging.getLogger(__name__)
 
 #: Bumped whenever detection changes so stale cache entries are ignored.
 DETECTOR_VERSION = 6
@@ -209,47 +212,49 @@ class CornerCache:
             from s2r.targets import DETECTOR_REVISION
         self.target_key = "" if target is None else hashlib.sha256(
             f"{DETECTOR_REVISION}|{target.model_dump_json()}".encode()).hexdigest()[:16]
+        self.usable = cache.folder_usable(self.folder)
+        if not self.usable:
+            log.warning("%s is a symbolic link or not a folder: the corner cache is not used (nothing is read "
+                        "from or written through it)", self.folder)
         self.remove_stale_temporaries()
 
     def remove_stale_temporaries(self, max_age_s: float = 60.0) -> int:
-        """Delete half-written ``.*.tmp`` files older than ``max_age_s`` (left by a killed run); their count."""
-        removed = 0
-        now = time.time()
-        with contextlib.suppress(OSError):
-            for tmp in self.folder.glob(".*.tmp"):
-                with contextlib.suppress(OSError):
-                    if now - tmp.lstat().st_mtime > max_age_s:
-                        tmp.unlink()
-                        removed += 1
-        return removed
+        """Delete s2r's own half-written entries older than ``max_age_s`` (left by a killed run); their count."""
+        return cache.remove_stale_temporaries(self.folder, max_age_s=max_age_s) if self.usable else 0
 
     def _file(self, sha256: str, pattern: tuple[int, int]) -> Path:
         board = f"t{self.target_key}" if self.target_key else f"{pattern[0]}x{pattern[1]}"
         return self.folder / f"{sha256}-{board}-v{DETECTOR_VERSION}.json"
 
     def get(self, name: str, sha256: str, pattern: tuple[int, int]) -> Detection | None:
-        """The cached detection of this content, renamed to ``name``, or None."""
-        try:
-            data = json.loads(self._file(sha256, pattern).read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+        """The cached detection of this content, renamed to ``name``, or None (also for an entry that is not a
+        regular file or fails validation: see :mod:`s2r.calib.cache`)."""
+        path = self._file(sha256, pattern)
+        data = cache.read_entry(self.folder, path.name) if self.usable else None
+        if data is None:
             return None
-        corners = None if data.get("corners") is None else np.asarray(data["corners"], np.float32).reshape(-1, 2)
-        size = None if data.get("size") is None else (int(data["size"][0]), int(data["size"][1]))
-        ids = None if data.get("ids") is None else np.asarray(data["ids"], np.int32).reshape(-1)
-        if self.target_key and corners is not None and (ids is None or len(ids) != len(corners)):
-            return None  # a target's entry must carry one id per corner
-        return Detection(name, sha256, data["status"], size=size, corners=corners,
-                         detector=data.get("detector", ""), detail=data.get("detail", ""), cached=True, ids=ids)
+        try:
+            entry = cache.validate_entry(data, corner_count=None if self.target_key else pattern[0] * pattern[1],
+                                         with_ids=bool(self.target_key))
+        except ValueError as exc:
+            log.debug("corner cache entry %s ignored (detected again): %s", path, exc)
+            return None
+        corners = None if entry["corners"] is None else np.asarray(entry["corners"], np.float32).reshape(-1, 2)
+        ids = None if entry["ids"] is None else np.asarray(entry["ids"], np.int32).reshape(-1)
+        return Detection(name, sha256, entry["status"], size=entry["size"], corners=corners,
+                         detector=entry["detector"], detail=entry["detail"], cached=True, ids=ids)
 
     def put(self, det: Detection, pattern: tuple[int, int]) -> None:
         """Store ``det`` (atomic write; a failure to write the cache is not an error)."""
+        if not self.usable or not cache.folder_usable(self.folder):
+            return
         data: dict[str, Any] = {"status": det.status, "size": det.size, "detector": det.detector,
                                 "detail": det.detail,
                                 "corners": None if det.corners is None else det.corners.round(4).tolist()}
         if det.ids is not None:
             data["ids"] = det.ids.astype(int).tolist()
         with contextlib.suppress(OSError, S2RError):
-            atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True)
+            atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True, root=self.folder)
 
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,

@@ -9,7 +9,6 @@ and a rectified pair with horizontal lines to judge the epipolar alignment.
 
 from __future__ import annotations
 
-import html
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +24,15 @@ from s2r.calib.mono import MonoCalibration
 from s2r.calib.report_plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
 from s2r.calib.stereo import StereoCalibration
 from s2r.calib.synth import board_object_points
-from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, image_to_data_uri, write_report
+from s2r.fileio import OutputBatch
+from s2r.htmlreport import (
+    ReportSection,
+    figure_to_data_uri,
+    html_fragment,
+    html_table,
+    image_to_data_uri,
+    write_report,
+)
 from s2r.profile import Camera
 from s2r.rectification import stereo_rectification
 
@@ -125,8 +132,9 @@ def _verdict_section(result: StereoCalibration | MonoCalibration) -> ReportSecti
     v = result.verdict
     if v is None:
         return ReportSection("Verdict", paragraphs=["no verdict (computed by calibrate_stereo / calibrate_mono)"])
-    items = "".join(f"<li><b>{r.level}</b>: {html.escape(r.text)}</li>" for r in v.reasons)
-    return ReportSection("Verdict", banner=(_BANNER[v.level], f"{v.level.upper()}"), paragraphs=[f"<ul>{items}</ul>"])
+    items = html_fragment("<ul>{% for r in reasons %}<li><b>{{ r.level }}</b>: {{ r.text }}</li>{% endfor %}</ul>",
+                          reasons=v.reasons)
+    return ReportSection("Verdict", banner=(_BANNER[v.level], f"{v.level.upper()}"), paragraphs=[items])
 
 
 def _extrinsic_rows(result: StereoCalibration) -> list[list[Any]]:
@@ -147,7 +155,7 @@ def _extrinsic_rows(result: StereoCalibration) -> list[list[Any]]:
 
 def _models_table(result: StereoCalibration | MonoCalibration) -> str:
     if result.models is None:
-        return "<p class='note'>model comparison not computed</p>"
+        return html_fragment("<p class='note'>model comparison not computed</p>")
     rows = [[s.model + (" (used)" if s.chosen else ""), s.heldout_px, " ".join(f"{f:.3f}" for f in s.folds_px),
              "best" if s.model == result.models.best else ""] for s in result.models.scores]
     return html_table(["lens model (--distortion)", "held-out RMS (px)", "per fold (px)", ""], rows,
@@ -168,12 +176,12 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
     assert q is not None
     size = p.image_size
     rows = _camera_rows("left", p.left) + _camera_rows("right", p.right) + _extrinsic_rows(result)
-    summary = ReportSection("Summary", paragraphs=[html.escape(
+    summary = ReportSection("Summary", paragraphs=[(
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; lens model {q.distortion_terms}; "
         f"RMS left {q.rms_left_px:.3f} px, right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; "
         f"epipolar RMS after rectification {result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm. "
         "Convention: X_right = R X_left + T (metres).")]
-        + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
+        + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
         tables=[html_table(["parameter", "value", "std", "relative std"], rows)])
     models = ReportSection("Lens model comparison", tables=[_models_table(result)])
     views = list(result.views)
@@ -197,7 +205,7 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
                 {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
             ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
                                                  board_object_points(q.pattern, q.square_m), p.R, p.T))]))
-    sections.append(ReportSection("Coverage", paragraphs=[html.escape(
+    sections.append(ReportSection("Coverage", paragraphs=[(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
         f"{100 * result.spread.size_fraction[0]:.0f}-{100 * result.spread.size_fraction[1]:.0f} % of the image")],
@@ -215,9 +223,9 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     cam = result.profile.camera
     q = result.profile.provenance.calibration
     assert q is not None
-    summary = ReportSection("Summary", paragraphs=[html.escape(
+    summary = ReportSection("Summary", paragraphs=[(
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
-        + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
+        + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
         tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])
     names = list(result.view_names) + [d.name for d in result.dropped if d.rms_px is not None]
     errs = list(result.view_errors_px) + [float(d.rms_px) for d in result.dropped if d.rms_px is not None]
@@ -242,8 +250,9 @@ def calibration_sections(result: StereoCalibration | MonoCalibration) -> list[Re
 
 
 def write_calibration_report(result: StereoCalibration | MonoCalibration, path: Path, *,
-                             force: bool = False) -> Path:
-    """Write the HTML report to ``path`` (atomic; refuses to overwrite unless ``force``)."""
+                             force: bool = False, batch: OutputBatch | None = None) -> Path:
+    """Write the HTML report to ``path`` (atomic; refuses to overwrite unless ``force``), or stage it in
+    ``batch`` to be published with the profile."""
     name = result.profile.name
     return write_report(path, f"s2r calibration: {name}", calibration_sections(result),
-                        subtitle=result.profile.provenance.method, force=force)
+                        subtitle=result.profile.provenance.method, force=force, batch=batch)

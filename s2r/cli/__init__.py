@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import errno
+import io
 import logging
 import os
 import re
 import sys
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import NoReturn, TextIO
 
 from s2r._version import __version__
 from s2r.cli import (
@@ -28,11 +30,12 @@ from s2r.cli import (
     sources_cmd,
     validate_cmd,
 )
-from s2r.errors import S2RError
+from s2r.errors import S2RError, terminal_safe
 
 __all__ = ["build_parser", "main"]
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+_WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EDQUOT, errno.EPERM})
 _REPORT_HINT = "this is a bug in s2r: rerun with --debug and report the command and the traceback"
 
 
@@ -112,8 +115,47 @@ def _accept_global_options_anywhere(parser: argparse.ArgumentParser) -> None:
 
 
 class _WarningFormatter(logging.Formatter):
+    """``level: message`` on one line: every control character of the message (a file name's ESC, BEL, CR or
+    newline) escaped."""
+
     def format(self, record: logging.LogRecord) -> str:
-        return f"{record.levelname.lower()}: {record.getMessage()}"
+        return f"{record.levelname.lower()}: {terminal_safe(record.getMessage())}"
+
+
+class _TerminalSafeStream(io.TextIOBase):
+    """stdout / stderr of the CLI: control characters other than newline and tab are escaped on the way out, so
+    no name printed anywhere can send ESC, OSC, BEL or CR to the terminal. The progress bar alone draws its
+    ``\\r`` through :meth:`write_raw`."""
+
+    def __init__(self, stream: TextIO) -> None:
+        super().__init__()
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        """Write ``text`` with its control characters (but newlines and tabs) escaped; returns ``len(text)``."""
+        self.stream.write(terminal_safe(text, keep="\n\t"))
+        return len(text)
+
+    def write_raw(self, text: str) -> int:
+        """Write ``text`` as it is (s2r's own fixed progress line)."""
+        return self.stream.write(text)
+
+    def flush(self) -> None:
+        """Flush the wrapped stream."""
+        self.stream.flush()
+
+    def isatty(self) -> bool:
+        """Whether the wrapped stream is a terminal."""
+        return self.stream.isatty()
+
+    def fileno(self) -> int:
+        """The wrapped stream's descriptor."""
+        return self.stream.fileno()
+
+    @property
+    def encoding(self) -> str:  # type: ignore[override]
+        """The wrapped stream's encoding."""
+        return getattr(self.stream, "encoding", None) or "utf-8"
 
 
 def _configure_logging(quiet: bool) -> None:
@@ -132,8 +174,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     _Parser.argv = list(sys.argv[1:] if argv is None else argv)
-    args = parser.parse_args(argv)
-    _configure_logging(args.quiet)
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _TerminalSafeStream(sys.stdout), _TerminalSafeStream(sys.stderr)
+    try:
+        args = parser.parse_args(argv)
+        _configure_logging(args.quiet)
+        return _run(args)
+    finally:
+        sys.stdout, sys.stderr = streams
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         code: int = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the boundary, not at interpreter exit
@@ -159,12 +210,16 @@ def _report(exc: Exception) -> int:
         if isinstance(exc, ValidationError):  # a value from an input broke a bound of s2r.profile
             first = exc.errors()[0] if exc.errors() else {"loc": (), "msg": str(exc)}
             where = ".".join(str(p) for p in first["loc"]) or exc.title
-            print(f"error: {where}: {' '.join(str(first['msg']).split())}", file=sys.stderr)
+            print(terminal_safe(f"error: {where}: {' '.join(str(first['msg']).split())}"), file=sys.stderr)
             return EXIT_BAD_INPUT
         if isinstance(exc, OSError) and exc.filename is not None:  # a file the user named is unusable
-            print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+            print(f"error: {terminal_safe(exc.filename)}: {terminal_safe(exc.strerror or exc)}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        detail = " ".join(str(exc).split())[:200]
+        if isinstance(exc, OSError) and exc.errno in _WRITE_ERRNOS:  # a full or read-only disk, not a bug
+            print(f"error: cannot write: {terminal_safe(exc.strerror or exc)} (free space or choose a writable "
+                  "location)", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        detail = terminal_safe(" ".join(str(exc).split())[:200])
         print(f"error: internal error ({type(exc).__name__}: {detail}); {_REPORT_HINT}", file=sys.stderr)
     except BrokenPipeError:
         return _quiet_broken_pipe()

@@ -139,7 +139,7 @@ class ProgressBar:
         filled = int(self.width * done / total)
         bar = "#" * filled + "-" * (self.width - filled)
         end = "\n" if done >= total else ""
-        self.stream.write(f"\r{label:<18} [{bar}] {done}/{total}{end}")
+        getattr(self.stream, "write_raw", self.stream.write)(f"\r{label:<18} [{bar}] {done}/{total}{end}")
         self.stream.flush()
 
     def _log(self, done: int, total: int, label: str) -> None:

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
-from s2r.errors import CalibrationError
-from s2r.fileio import check_output_free, prepare_output_dir
+from s2r.errors import CalibrationError, terminal_safe
+from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
 
 __all__ = ["register"]
 
@@ -111,7 +111,7 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``s2r calibrate``; returns the exit code."""
-    from s2r.formats.s2r_yaml import dump_profile
+    from s2r.formats.s2r_yaml import profile_to_yaml
 
     pattern = _check_args(args)
     lens, target = _lens_and_target(args, pattern)
@@ -150,11 +150,13 @@ def run(args: argparse.Namespace) -> int:
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
         result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
                                   fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
-    dump_profile(result.profile, out, force=args.force)
-    if args.report is not None:
-        from s2r.calib.report import write_calibration_report
+    with OutputBatch(force=args.force) as batch:  # the profile and its report, both or neither
+        batch.add_text(out, profile_to_yaml(result.profile))
+        if args.report is not None:
+            from s2r.calib.report import write_calibration_report
 
-        write_calibration_report(result, args.report / "index.html", force=True)
+            write_calibration_report(result, args.report / "index.html", batch=batch)
+        batch.publish()
     if args.json:
         print_json({**result.figures(), "output": str(out),
                     "report": None if args.report is None else str(args.report / "index.html")})
@@ -226,4 +228,4 @@ def _print_summary(result: Any, out: Path) -> None:
             + " px (* used)")
     for d in figures["dropped"]:
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
-        print(f"  skipped {d['name']}{rms}: {d['reason']}")
+        print(f"  skipped {terminal_safe(d['name'])}{rms}: {terminal_safe(d['reason'])}")

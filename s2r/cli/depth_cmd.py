@@ -12,7 +12,7 @@ import numpy as np
 from s2r.cli._common import ProgressBar, add_force, add_json, print_json
 from s2r.depth.names import PRESETS, STAGES
 from s2r.errors import DepthError
-from s2r.fileio import check_output_dir, check_output_free, prepare_output_dir
+from s2r.fileio import OutputBatch, check_output_dir, check_output_free, prepare_output_dir
 
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
@@ -134,9 +134,11 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     if depth_range is not None:
         result, removed = limit_depth_range(result, *depth_range)
     rect = pipeline.geometry_for((left.shape[1], left.shape[0])).rectification
-    written = write_outputs(args.output, result, ply=args.ply, force=args.force)
-    written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
-                                     "rectified_left", force=args.force))
+    with OutputBatch(force=args.force, root=args.output) as batch:  # every file, or none
+        written = write_outputs(args.output, result, ply=args.ply, batch=batch)
+        written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
+                                         "rectified_left", batch=batch))
+        batch.publish()
     valid_fraction = float(result.valid.mean())
     if valid_fraction < LOW_VALID_FRACTION:  # a silent 0 % looks like a result; it is almost always the input
         log.warning("%s: only %.1f %% of the pixels have depth: check that LEFT and RIGHT are not swapped and "
@@ -170,16 +172,18 @@ def _run_sequence(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     check_output_free(args.output / "camera_info.yaml", force=args.force)
     bar = ProgressBar(enabled=None if not args.quiet else False)
     depth_range = _depth_range(args, pipeline)
-    frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.workers,
-                          progress=bar, depth_range_m=depth_range)
-    # every frame has the profile's size unless --resize: then the camera_info of the first frame's size
-    size = pipeline.profile.image_size
-    if args.resize and pairs:
-        shape = read_image(pairs[0][0]).shape
-        size = (shape[1], shape[0])
-    rect = pipeline.geometry_for(size).rectification
-    write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/rectified_left",
-                      force=args.force)
+    with OutputBatch(force=args.force, root=args.output) as batch:  # the whole sequence, or nothing
+        frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.workers,
+                              progress=bar, depth_range_m=depth_range, batch=batch)
+        # every frame has the profile's size unless --resize: then the camera_info of the first frame's size
+        size = pipeline.profile.image_size
+        if args.resize and pairs:
+            shape = read_image(pairs[0][0]).shape
+            size = (shape[1], shape[0])
+        rect = pipeline.geometry_for(size).rectification
+        write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/rectified_left",
+                          batch=batch)
+        batch.publish()
     if args.json:
         print_json({"profile": pipeline.profile.name, "preset": pipeline.preset, "frames": frames,
                     "output": str(args.output), **_geometry(pipeline, rect, depth_range)})

@@ -17,7 +17,7 @@ from s2r.cli._common import (
     print_json,
 )
 from s2r.errors import RenderError
-from s2r.fileio import atomic_write_text
+from s2r.fileio import atomic_write_text, read_text_file
 
 __all__ = ["SCENE_CHOICES", "register"]
 
@@ -90,7 +90,8 @@ def _cmd_boards(args: argparse.Namespace) -> int:
         right_gain=args.right_gain, target=target, cut_share=args.cut_share,
     )
     if args.target is not None:
-        atomic_write_text(result.out_dir / "target.yaml", args.target.read_text(encoding="utf-8"), force=True)
+        atomic_write_text(result.out_dir / "target.yaml", read_text_file(args.target), force=True,
+                          root=result.out_dir)
     if args.json:
         print_json({"out_dir": result.out_dir, "views": len(result.poses), "truth": result.truth_path})
     else:

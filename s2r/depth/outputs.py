@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from s2r.depth.pipeline import DepthResult
 from s2r.errors import DepthError
-from s2r.fileio import atomic_write_bytes, atomic_write_npy, atomic_write_text
+from s2r.fileio import OutputBatch, atomic_write_bytes, atomic_write_npy, atomic_write_text, npy_bytes
 from s2r.formats.ros import RosCameraInfo, camera_info_to_yaml
 from s2r.imageio import decode_image_file
 from s2r.rectification import StereoRectification
@@ -146,9 +146,13 @@ def rectified_camera_info(rect: StereoRectification, *, name: str = "rectified_l
 
 
 def write_camera_info(path: str | Path, rect: StereoRectification, *, name: str = "rectified_left",
-                      force: bool = False) -> Path:
-    """Write :func:`rectified_camera_info` as camera_calibration_parsers YAML (atomic)."""
-    return atomic_write_text(path, camera_info_to_yaml(rectified_camera_info(rect, name=name)), force=force)
+                      force: bool = False, batch: OutputBatch | None = None) -> Path:
+    """Write :func:`rectified_camera_info` as camera_calibration_parsers YAML (atomic; staged in ``batch``, to
+    be published with the files beside it, when given)."""
+    text = camera_info_to_yaml(rectified_camera_info(rect, name=name))
+    if batch is not None:
+        return batch.add_text(path, text)
+    return atomic_write_text(path, text, force=force)
 
 
 def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
@@ -172,31 +176,43 @@ def write_disparity(path: str | Path, disparity: NDArray[np.floating], *, force:
 def write_ply(path: str | Path, points: NDArray[np.float32], colours: NDArray[np.uint8], *, force: bool = False
               ) -> Path:
     """Write (N, 3) points (metres) with (N, 3) RGB colours as a binary little-endian PLY."""
+    return atomic_write_bytes(path, ply_bytes(points, colours), force=force)
+
+
+def ply_bytes(points: NDArray[np.float32], colours: NDArray[np.uint8]) -> bytes:
+    """(N, 3) points (metres) with (N, 3) RGB colours as the bytes of a binary little-endian PLY."""
     n = int(points.shape[0])
     header = (f"ply\nformat binary_little_endian 1.0\ncomment s2r depth point cloud, metres, rectified left "
               f"optical frame\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
               "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n")
     rows = np.empty(n, dtype=[("xyz", "<f4", (3,)), ("rgb", "u1", (3,))])
     rows["xyz"], rows["rgb"] = points, colours
-    return atomic_write_bytes(path, header.encode("ascii") + rows.tobytes(), force=force)
+    return header.encode("ascii") + rows.tobytes()
 
 
 def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", ply: bool = False,
-                  force: bool = False, depth_range_m: tuple[float, float] | None = None) -> list[Path]:
-    """Write ``{prefix}disparity.npy``, ``depth.png``, ``depth_color.png`` (and ``points.ply``) into ``folder``.
+                  force: bool = False, depth_range_m: tuple[float, float] | None = None,
+                  batch: OutputBatch | None = None) -> list[Path]:
+    """Write ``{prefix}disparity.npy``, ``depth.png``, ``depth_color.png`` (and ``points.ply``) into ``folder``,
+    published together or not at all (staged in ``batch`` when given: a sequence publishes every frame at once).
 
     ``depth_range_m`` ``(near, far)``: depths outside it are written as invalid (see :func:`limit_depth_range`).
     """
     folder = Path(folder)
+    if batch is None:
+        with OutputBatch(force=force, root=folder) as own:
+            written = write_outputs(folder, result, prefix=prefix, ply=ply, depth_range_m=depth_range_m, batch=own)
+            own.publish()
+        return written
     if depth_range_m is not None:
         result, _ = limit_depth_range(result, *depth_range_m)
     colour_path = folder / f"{prefix}depth_color.png"
+    depth_path = folder / f"{prefix}depth.png"
     written = [
-        write_disparity(folder / f"{prefix}disparity.npy", result.disparity, force=force),
-        write_depth_png(folder / f"{prefix}depth.png", result.depth, force=force),
-        atomic_write_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q), colour_path),
-                           force=force),
+        batch.add_bytes(folder / f"{prefix}disparity.npy", npy_bytes(np.asarray(result.disparity, np.float32))),
+        batch.add_bytes(depth_path, _png_bytes(depth_to_mm(result.depth), depth_path)),
+        batch.add_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q), colour_path)),
     ]
     if ply:
-        written.append(write_ply(folder / f"{prefix}points.ply", *result.point_cloud(), force=force))
+        written.append(batch.add_bytes(folder / f"{prefix}points.ply", ply_bytes(*result.point_cloud())))
     return written

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from s2r.depth.outputs import IMAGE_SUFFIXES, read_image, write_outputs
 from s2r.depth.pipeline import DepthResult, StereoPipeline
 from s2r.errors import DepthError
+from s2r.fileio import OutputBatch
 from s2r.progress import ProgressCallback, report
 
 __all__ = ["frame_prefix", "pair_images", "run_sequence"]
@@ -56,11 +57,13 @@ def run_sequence(
     workers: int = 2,
     progress: ProgressCallback | None = None,
     depth_range_m: tuple[float, float] | None = None,
+    batch: OutputBatch | None = None,
 ) -> int:
     """Compute and write ``NN_disparity.npy``, ``NN_depth.png``, ``NN_depth_color.png`` (``NN_points.ply``)
     for every pair, in order (depths outside ``depth_range_m`` invalid); returns the number of frames written.
     Errors (unreadable image, size mismatch)
-    propagate from the frame that failed; frames not yet started are cancelled."""
+    propagate from the frame that failed; frames not yet started are cancelled. With ``batch`` every frame is
+    staged there (the caller publishes the whole sequence); without, each frame's files are published alone."""
     out = Path(out_dir)
     total = len(pairs)
     pending: deque[Future[list[Path]]] = deque()
@@ -74,7 +77,7 @@ def run_sequence(
             computed = computer.submit(_compute_after, pipeline, read, left)
             prefix = frame_prefix(index, total)
             pending.append(writer.submit(_write_after(out, computed, prefix, ply=ply, force=force,
-                                                      depth_range_m=depth_range_m)))
+                                                      depth_range_m=depth_range_m, batch=batch)))
             while len(pending) > 2 * workers + 2:
                 pending.popleft().result()
                 done += 1
@@ -103,6 +106,7 @@ def _compute_after(pipeline: StereoPipeline, read: Future[Pair], left: Path) -> 
 
 
 def _write_after(out: Path, computed: Future[DepthResult], prefix: str, *, ply: bool, force: bool,
-                 depth_range_m: tuple[float, float] | None = None) -> Callable[[], list[Path]]:
+                 depth_range_m: tuple[float, float] | None = None,
+                 batch: OutputBatch | None = None) -> Callable[[], list[Path]]:
     return lambda: write_outputs(out, computed.result(), prefix=prefix, ply=ply, force=force,
-                                 depth_range_m=depth_range_m)
+                                 depth_range_m=depth_range_m, batch=batch)

@@ -116,25 +116,47 @@ def as_int(value: Any, path: str | Path, field: str) -> int:
 
 
 def as_matrix(value: Any, shape: tuple[int, ...], path: str | Path, field: str) -> FloatArray:
-    """A finite float64 array of ``shape`` from a flat or nested list of numbers."""
-    flat = _flatten(value, path, field)
+    """A finite float64 array of ``shape`` from a flat or nested list of numbers (the count is checked while
+    walking, so a list that holds far more, or itself, is refused before it is expanded)."""
     expected = int(np.prod(shape))
+    flat = _flatten(value, path, field, limit=expected)
     if len(flat) != expected:
         raise FormatError(f"expected {expected} numbers, got {len(flat)}", path=path, field=field)
     return np.array(flat, dtype=np.float64).reshape(shape)
 
 
-def _flatten(value: Any, path: str | Path, field: str) -> list[float]:
+#: Deepest list nesting a matrix field may have (a 3x3 matrix as rows is 2).
+_MAX_NESTING = 8
+
+
+def _flatten(value: Any, path: str | Path, field: str, *, limit: int) -> list[float]:
+    """The numbers of a flat or nested list, in order; FormatError past ``limit`` numbers (or about four times
+    as many items of any kind), past :data:`_MAX_NESTING` levels, or on a list that contains itself."""
     if isinstance(value, np.ndarray):
+        if value.size > limit:
+            raise FormatError(f"expected {limit} numbers, got {value.size}", path=path, field=field)
         value = value.tolist()
     if not isinstance(value, (list, tuple)):
         raise FormatError(f"expected a list of numbers, got {type(value).__name__}", path=path, field=field)
     out: list[float] = []
-    for item in value:
-        if isinstance(item, (list, tuple)):
-            out.extend(_flatten(item, path, field))
-        else:
-            out.append(as_float(item, path, field))
+    budget = [4 * limit + 64]  # items visited, lists included: an alias bomb of empty lists has no numbers
+
+    def walk(items: list[Any] | tuple[Any, ...], depth: int, on_path: frozenset[int]) -> None:
+        if depth > _MAX_NESTING:
+            raise FormatError(f"lists nested deeper than {_MAX_NESTING} levels", path=path, field=field)
+        for item in items:
+            budget[0] -= 1
+            if budget[0] < 0 or len(out) > limit:
+                raise FormatError(f"expected {limit} numbers, got more", path=path, field=field)
+            if isinstance(item, (list, tuple)):
+                if id(item) in on_path:
+                    raise FormatError("a list that contains itself (a recursive YAML alias)", path=path,
+                                      field=field)
+                walk(item, depth + 1, on_path | {id(item)})
+            else:
+                out.append(as_float(item, path, field))
+
+    walk(value, 1, frozenset({id(value)}))
     return out
 
 

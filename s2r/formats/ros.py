@@ -22,7 +22,7 @@ import yaml
 from numpy.typing import NDArray
 
 from s2r.errors import FormatError
-from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
+from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
 from s2r.formats._common import (
     as_float,
     as_int,
@@ -280,13 +280,16 @@ def camera_info_to_yaml(info: RosCameraInfo) -> str:
 def dump_ros_pair(
     profile: StereoProfile, folder: str | Path, *, force: bool = False, alpha: float = 0.0
 ) -> tuple[Path, Path]:
-    """Write ``left.yaml`` and ``right.yaml`` (rectified camera_info) into ``folder``; refuse to overwrite."""
+    """Write ``left.yaml`` and ``right.yaml`` (rectified camera_info) into ``folder``, both or neither; refuse to
+    overwrite."""
     out = Path(folder)
     targets = (out / "left.yaml", out / "right.yaml")
     for target in targets:
         check_output_free(target, force=force)
     prepare_output_dir(out, force=True)
     left, right = ros_pair_from_profile(profile, alpha=alpha)
-    atomic_write_text(targets[0], camera_info_to_yaml(left), force=force)
-    atomic_write_text(targets[1], camera_info_to_yaml(right), force=force)
+    with OutputBatch(force=force, root=out) as batch:
+        batch.add_text(targets[0], camera_info_to_yaml(left))
+        batch.add_text(targets[1], camera_info_to_yaml(right))
+        batch.publish()
     return targets

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import DepthError
+from s2r.fileio import read_npy
 from s2r.imageio import decode_image_file
 
 __all__ = ["DEPTH_SUFFIXES", "IMAGE_SUFFIXES", "FramePaths", "list_files", "pair_files", "read_depth", "read_grey"]
@@ -52,6 +53,9 @@ def list_files(spec: str | Path, suffixes: Sequence[str], *, option: str) -> lis
         files = sorted(Path(p) for p in glob.glob(text) if Path(p).is_file())
     elif path.is_file():
         files = [path]
+    elif path.exists():
+        raise DepthError("not a regular file (a device, FIFO or socket): s2r reads files only", path=text,
+                         field=option, hint="pass a folder of images or a quoted glob")
     else:
         raise DepthError("no such folder or file", path=text, field=option, hint="pass a folder or a quoted glob")
     if not files:
@@ -105,11 +109,15 @@ def depth_from_array(array: NDArray[np.generic], *, scale_m: float, name: str) -
 
 def read_depth(path: Path, *, scale_m: float = DEFAULT_DEPTH_SCALE_M) -> NDArray[np.float32]:
     """A device depth file (see the module docstring) as (H, W) float32 metres, NaN = no data."""
+    array: NDArray[np.generic] | None
     if path.suffix.lower() == ".npy":
         try:
-            array = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as exc:
-            raise DepthError(f"not a readable .npy array: {exc}", path=path, hint="save with numpy.save") from None
+            array = read_npy(path)
+        except FileNotFoundError:
+            raise DepthError("file not found", path=path, hint="check the path") from None
+        except (OSError, ValueError) as exc:  # NotARegularFile is a ValueError
+            raise DepthError(f"not a readable .npy array: {exc}", path=path,
+                             hint="save (H, W) float32 metres with numpy.save") from None
     else:
         array, reason = decode_image_file(path, cv2.IMREAD_UNCHANGED)
         if array is None:

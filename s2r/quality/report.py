@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from s2r.errors import terminal_safe
 from s2r.htmlreport import ReportSection, html_table, write_report
 from s2r.quality.metrics import FrameQuality
 from s2r.quality.run import QualityResult
@@ -54,8 +55,9 @@ def _datasheet_line(result: QualityResult) -> list[str]:
 def quality_lines(result: QualityResult) -> list[str]:
     """The terminal summary: per-frame table, per-bin table, temporal noise, datasheet figures."""
     scored = sum(f.distance_m is not None for f in result.frames)
-    lines = [f"depth quality of {result.profile} ({result.source}): {scored}/{len(result.frames)} frames scored"]
-    lines += _table(FRAME_HEADERS, frame_rows(result.frames))
+    lines = [f"depth quality of {terminal_safe(result.profile)} ({terminal_safe(result.source)}): "
+             f"{scored}/{len(result.frames)} frames scored"]
+    lines += _table(FRAME_HEADERS, [[terminal_safe(c) for c in row] for row in frame_rows(result.frames)])
     lines += ["", "per distance bin (medians over frames):", *_table(BIN_HEADERS, bin_rows(result.bins))]
     for t in result.temporal:
         lines.append(f"temporal noise of pose {t['pose_group']} ({t['frames']} frames at {t['distance_m']:.3f} m): "

@@ -17,8 +17,8 @@ from s2r.quality.bags import bag_pairs, decode_depth, decode_image
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, FramePaths, read_depth, read_grey
 from s2r.quality.run import DepthView
 
-__all__ = ["bag_device_views", "bag_stereo_views", "device_fb", "device_views", "stereo_fb", "stereo_view",
-           "stereo_views", "stereo_visible_m"]
+__all__ = ["bag_device_views", "bag_stereo_views", "check_depth_size", "device_fb", "device_views", "stereo_fb",
+           "stereo_view", "stereo_views", "stereo_visible_m"]
 
 
 def stereo_fb(pipeline: StereoPipeline) -> float:
@@ -71,7 +71,11 @@ def device_views(profile: StereoProfile, frames: Sequence[FramePaths], *,
     for frame in frames:
         assert frame.depth is not None
         grey = read_grey(frame.left) if frame.left != frame.depth else None
-        depth = read_depth(frame.depth, scale_m=depth_scale_m)
+        depth = check_depth_size(read_depth(frame.depth, scale_m=depth_scale_m), profile, name=str(frame.depth))
+        if grey is not None and grey.shape != depth.shape:
+            raise DepthError(f"left image is {grey.shape[1]}x{grey.shape[0]}, its depth image "
+                             f"{depth.shape[1]}x{depth.shape[0]}", path=frame.left,
+                             hint="pass depth registered to the left image (same size)")
         yield DepthView(frame.left.name if grey is not None else frame.depth.name, grey, depth, K, D)
 
 
@@ -90,5 +94,15 @@ def bag_device_views(profile: StereoProfile, bag: Path, left_topic: str, depth_t
                                               max_dt_s=max_dt_s):
         image = decode_image(lm, lt)
         grey = image if image.ndim == 2 else np.asarray(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), np.uint8)
-        yield DepthView(name, grey, decode_depth(dm, dt, scale_m=depth_scale_m, name=name), profile.left.K,
-                        profile.left.D)
+        depth = check_depth_size(decode_depth(dm, dt, scale_m=depth_scale_m, name=name), profile, name=name)
+        yield DepthView(name, grey, depth, profile.left.K, profile.left.D)
+
+
+def check_depth_size(depth: NDArray[np.float32], profile: StereoProfile, *, name: str) -> NDArray[np.float32]:
+    """``depth`` when it is (H, W) of the profile's left image; DepthError naming ``name`` and both sizes."""
+    width, height = profile.left.width_px, profile.left.height_px
+    if depth.shape != (height, width):
+        shape = "x".join(str(v) for v in depth.shape[::-1])
+        raise DepthError(f"depth image is {shape}, the profile {profile.name} expects {width}x{height}", path=name,
+                         hint="pass depth registered to the left image at the profile's resolution")
+    return depth

@@ -17,10 +17,10 @@ import yaml
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
-from s2r.fileio import atomic_write_text
+from s2r.fileio import OutputBatch
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
-from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names
+from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names, remove_stale_numbered
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import BoardGeometry, sample_board_poses
 from s2r.render.rig import StereoJob, check_render_options, render_stereo_images, stereo_setups
@@ -156,13 +156,15 @@ def render_board_set(
             for k, T in enumerate(poses)
         ]
         images = run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards")
-    left_paths, right_paths = [], []
-    for name, (left, right) in zip(names, images, strict=True):
-        left_paths.append(encode_png(out / "left" / f"{name}.png", left))
-        right_paths.append(encode_png(out / "right" / f"{name}.png", right))
     options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain}
     if layout is not None:
         poses = [T @ layout.T_grid_target for T in poses]  # the truth in the target's own frame
-    truth_path = atomic_write_text(out / "truth.yaml", _truth(profile, board, names, poses, options, target, cut),
-                                   force=True)
+    with OutputBatch(force=True, root=out) as batch:  # the whole set, or nothing
+        left_paths = [encode_png(out / "left" / f"{name}.png", left, batch=batch)
+                      for name, (left, _) in zip(names, images, strict=True)]
+        right_paths = [encode_png(out / "right" / f"{name}.png", right, batch=batch)
+                       for name, (_, right) in zip(names, images, strict=True)]
+        truth_path = batch.add_text(out / "truth.yaml", _truth(profile, board, names, poses, options, target, cut))
+        batch.publish()
+    remove_stale_numbered(out, ("left", "right"), keep=left_paths + right_paths)
     return BoardSet(out, left_paths, right_paths, truth_path, [np.asarray(T) for T in poses])

@@ -20,13 +20,13 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from s2r.fileio import atomic_write_npy, atomic_write_text
+from s2r.fileio import OutputBatch, npy_bytes
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
 from s2r.render.boards import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
-from s2r.render.outputs import clear_numbered, encode_png, numbered_names
+from s2r.render.outputs import clear_numbered, encode_png, numbered_names, remove_stale_numbered
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import BoardGeometry, clip_planes
 from s2r.render.rig import (
@@ -163,17 +163,22 @@ def write_scene(frames: Sequence[SceneFrame], out_dir: str | Path, *, force: boo
 
     Refuses a folder that holds files unless ``force``. Returns the folder.
     """
-    out = clear_numbered(out_dir, ("left", "right", "depth", "disparity", "depth_rect"), force=force)
+    subdirs = ("left", "right", "depth", "disparity", "depth_rect")
+    out = clear_numbered(out_dir, subdirs, force=force)
     entries = []
-    for f in frames:
-        encode_png(out / "left" / f"{f.name}.png", f.left)
-        encode_png(out / "right" / f"{f.name}.png", f.right)
-        for folder, array in (("depth", f.depth_m), ("disparity", f.disparity_rect_px), ("depth_rect", f.depth_rect_m)):
-            atomic_write_npy(out / folder / f"{f.name}.npy", np.asarray(array, dtype=np.float32), force=True)
-        entries.append({"name": f.name, "left": f"left/{f.name}.png", "right": f"right/{f.name}.png",
-                        "depth": f"depth/{f.name}.npy", "disparity": f"disparity/{f.name}.npy",
-                        "depth_rect": f"depth_rect/{f.name}.npy", "description": f.description})
-    text = yaml.safe_dump({"format": "s2r-render-scene", "schema_version": 1, "frames": entries}, sort_keys=False)
-    atomic_write_text(out / "scene.yaml", "# s2r rendered scene: ground truth in metres and pixels\n" + text,
-                      force=True)
+    with OutputBatch(force=True, root=out) as batch:  # the whole scene, or nothing
+        for f in frames:
+            encode_png(out / "left" / f"{f.name}.png", f.left, batch=batch)
+            encode_png(out / "right" / f"{f.name}.png", f.right, batch=batch)
+            for folder, array in (("depth", f.depth_m), ("disparity", f.disparity_rect_px),
+                                  ("depth_rect", f.depth_rect_m)):
+                batch.add_bytes(out / folder / f"{f.name}.npy", npy_bytes(np.asarray(array, dtype=np.float32)))
+            entries.append({"name": f.name, "left": f"left/{f.name}.png", "right": f"right/{f.name}.png",
+                            "depth": f"depth/{f.name}.npy", "disparity": f"disparity/{f.name}.npy",
+                            "depth_rect": f"depth_rect/{f.name}.npy", "description": f.description})
+        text = yaml.safe_dump({"format": "s2r-render-scene", "schema_version": 1, "frames": entries},
+                              sort_keys=False)
+        batch.add_text(out / "scene.yaml", "# s2r rendered scene: ground truth in metres and pixels\n" + text)
+        written = batch.publish()
+    remove_stale_numbered(out, subdirs, keep=written)
     return out

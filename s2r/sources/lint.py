@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from s2r.errors import SourceError
+from s2r.errors import SourceError, terminal_safe
 from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
 from s2r.sources.description import CameraSpec, Description
 from s2r.sources.lint_geometry import baseline_findings
@@ -55,10 +55,10 @@ class Finding:
         return asdict(self)
 
     def one_line(self) -> str:
-        """``file:line: severity [code] message (fix: ...)``."""
+        """``file:line: severity [code] message (fix: ...)``, control characters (of names) escaped."""
         where = f"{self.file}:{self.line}" if self.line else self.file
         fix = "" if self.fix in self.message else f" (fix: {self.fix})"
-        return f"{where}: {self.severity} [{self.code}] {self.message}{fix}"
+        return terminal_safe(f"{where}: {self.severity} [{self.code}] {self.message}{fix}")
 
 
 class _Report:

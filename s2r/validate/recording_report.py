@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import html
 from typing import TYPE_CHECKING, Any
 
-from s2r.htmlreport import ReportSection, html_table
+from s2r.errors import terminal_safe
+from s2r.htmlreport import ReportSection, html_fragment, html_table
 from s2r.quality.report import quality_sections
 from s2r.validate.recording import RecordingComparison
 
@@ -16,6 +16,9 @@ __all__ = ["recording_lines", "recording_section", "recording_sections"]
 
 _HEADERS = ("bin m", "frames real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real", "sim",
             "sub-pixel RMS px real", "sim", "fill % real", "sim", "verdict")
+
+_EXTRA = ("<h3>{{ title }}</h3>{% for p in notes %}<p class='note'>{{ p }}</p>{% endfor %}"
+          "{% for t in tables %}{{ t }}{% endfor %}")
 
 
 def _f(value: float | None, digits: int = 2) -> str:
@@ -35,7 +38,8 @@ def recording_lines(comparison: RecordingComparison) -> list[str]:
     """Terminal lines: one side-by-side row per distance bin."""
     real_n = sum(f.distance_m is not None for f in comparison.real.frames)
     sim_n = sum(f.distance_m is not None for f in comparison.sim.frames)
-    lines = [f"Recording {comparison.folder}: real camera on {real_n}/{len(comparison.real.frames)} boards, sim on "
+    lines = [f"Recording {terminal_safe(comparison.folder)}: real camera on {real_n}/{len(comparison.real.frames)} "
+             "boards, sim on "
              f"{sim_n} renders of the same poses (Intel's metrics on each board's PnP plane):"]
     rows = [_row(r) for r in comparison.rows]
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(_HEADERS)]
@@ -64,6 +68,5 @@ def recording_section(result: ValidationResult) -> ReportSection | None:
     parts = recording_sections(result.recording)
     head = parts[0]
     for extra in parts[1:]:
-        notes = "".join(f"<p class='note'>{p}</p>" for p in extra.paragraphs)
-        head.tables.append(f"<h3>{html.escape(extra.title)}</h3>{notes}" + "".join(extra.tables))
+        head.tables.append(html_fragment(_EXTRA, title=extra.title, notes=extra.paragraphs, tables=extra.tables))
     return head

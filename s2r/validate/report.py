@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import html
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -11,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from s2r.fileio import prepare_output_dir
-from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, write_report
+from s2r.htmlreport import Markup, ReportSection, figure_to_data_uri, html_fragment, html_table, write_report
 from s2r.validate.depth_accuracy import DepthAccuracy
 from s2r.validate.recording_report import recording_section
 from s2r.validate.run import ValidationResult
@@ -35,36 +34,41 @@ def _fraction_pct(value: float | None) -> str:
     return "n/a" if value is None else f"{100 * value:.1f} %"
 
 
-def _banner(result: ValidationResult) -> tuple[str, str]:
-    names = " vs ".join(f"{html.escape(p.name)} ({role})" for role, p in result.roles.items())
+def _banner(result: ValidationResult) -> tuple[str, Markup]:
+    names = " vs ".join(f"{p.name} ({role})" for role, p in result.roles.items())
     causes = result.root_causes
     if result.passed:
         head = ("PASS: the sim is a faithful twin of the real camera" if result.pair
                 else "PASS: the profile passes its self-check")
-        return "pass", f"{head}<small>{names}: all {len(result.checks)} checks within tolerance</small>"
+        return "pass", html_fragment(_BANNER, head=head, small=f"{names}: all {len(result.checks)} checks within "
+                                     "tolerance")
     only_bench = all(c.key == "bench" for c in causes)
     if only_bench:
-        return "warn", (f"CHECK THE TEST BENCH: the sim-vs-real figures pass, the renderer/calibrator self-test "
-                        f"does not<small>{names}</small>")
-    titles = ", ".join(html.escape(c.title.lower()) for c in causes if c.key != "bench")
+        return "warn", html_fragment(_BANNER, head="CHECK THE TEST BENCH: the sim-vs-real figures pass, the "
+                                     "renderer/calibrator self-test does not", small=names)
+    titles = ", ".join(c.title.lower() for c in causes if c.key != "bench")
     what = "the sim differs from the real camera in" if result.pair else "the profile fails on"
-    return "fail", (f"FAIL: {what} {titles}<small>{names}: {len(result.failures)} of {len(result.checks)} checks "
-                    f"beyond tolerance, explained by {len(causes)} root cause(s) below</small>")
+    return "fail", html_fragment(_BANNER, head=f"FAIL: {what} {titles}",
+                                 small=f"{names}: {len(result.failures)} of {len(result.checks)} checks beyond "
+                                 f"tolerance, explained by {len(causes)} root cause(s) below")
 
 
-def _causes_table(result: ValidationResult) -> str:
+_BANNER = "{{ head }}<small>{{ small }}</small>"
+_CAUSES = (
+    "<table class='causes'><caption>Root causes: every failing check is listed once, under the parameter that "
+    "explains it</caption><thead><tr>{% for h in headers %}<th class='text'>{{ h }}</th>{% endfor %}</tr></thead>"
+    "<tbody>{% for cause in causes %}<tr class='fail'><td class='text'><b>{{ loop.index }}. {{ cause.title }}</b>"
+    "</td><td class='text'>{{ cause.what }}</td><td class='text small'>{% if cause.consequences %}<ul>"
+    "{% for c in cause.consequences %}<li>{{ c.text }}</li>{% endfor %}</ul>{% else %}-{% endif %}</td>"
+    "<td class='text'>{{ cause.fix }}</td></tr>{% endfor %}</tbody></table>"
+)
+
+
+def _causes_table(result: ValidationResult) -> Markup:
     """Root causes as an HTML table: cause, what differs, the failing checks it explains, the one edit."""
-    body = []
-    for i, cause in enumerate(result.root_causes, 1):
-        effects = "".join(f"<li>{html.escape(c.text)}</li>" for c in cause.consequences)
-        body.append(f"<tr class='fail'><td class='text'><b>{i}. {html.escape(cause.title)}</b></td>"
-                    f"<td class='text'>{html.escape(cause.what)}</td>"
-                    f"<td class='text small'>{f'<ul>{effects}</ul>' if effects else '-'}</td>"
-                    f"<td class='text'>{html.escape(cause.fix)}</td></tr>")
-    head = "".join(f"<th class='text'>{h}</th>" for h in ("root cause", "what differs (sim vs real)",
-                                                           "also fails because of it", "the one edit that fixes it"))
-    return ("<table class='causes'><caption>Root causes: every failing check is listed once, under the parameter "
-            f"that explains it</caption><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
+    return html_fragment(_CAUSES, causes=result.root_causes,
+                         headers=("root cause", "what differs (sim vs real)", "also fails because of it",
+                                  "the one edit that fixes it"))
 
 
 def _verdict(result: ValidationResult) -> ReportSection:
@@ -92,7 +96,7 @@ def _parameters(result: ValidationResult) -> ReportSection:
                         "> 3 sigma", "verdict"], rows,
                        row_classes=[_cls(not r.exceeds_tolerance) for r in result.params],
                        caption="Sim and real parameters side by side (OpenCV 0-based pixels; each row in its unit)")
-    return ReportSection("Parameters", tables=[table], paragraphs=[html.escape(n) for n in result.notes])
+    return ReportSection("Parameters", tables=[table], paragraphs=list(result.notes))
 
 
 def _heat_map(diff: Any) -> str:
@@ -212,9 +216,9 @@ def _depth(result: ValidationResult) -> ReportSection:
     acc0 = next(iter(result.depth.values()))
     subpx = "; ".join(f"{role} {acc.subpixel_rms_px:.3f} px" for role, acc in result.depth.items()
                       if acc.subpixel_rms_px is not None)
-    text = (f"Preset {html.escape(acc0.preset)}, scenes {', '.join(acc0.scenes)}, planes at "
-            f"{', '.join(f'{d:.3g}' for d in acc0.distances_m)} m (jittered per frame). {html.escape(within)}. "
-            f"Measured sub-pixel RMS (plane fit): {html.escape(subpx or 'n/a')}; Intel's model uses 0.08 px.")
+    text = (f"Preset {acc0.preset}, scenes {', '.join(acc0.scenes)}, planes at "
+            f"{', '.join(f'{d:.3g}' for d in acc0.distances_m)} m (jittered per frame). {within}. "
+            f"Measured sub-pixel RMS (plane fit): {subpx or 'n/a'}; Intel's model uses 0.08 px.")
     table = html_table(headers, rows, caption="Depth error by true depth, as a percentage of the true depth")
     return ReportSection("Depth accuracy (rendered ground truth, rectified left image)", paragraphs=[text],
                          tables=[table],
@@ -274,7 +278,7 @@ def _edits(result: ValidationResult) -> ReportSection:
 
 def _xml(result: ValidationResult) -> ReportSection:
     return ReportSection("Sensor XML for the real camera (s2r profile export-gazebo)",
-                         paragraphs=[f"<pre>{html.escape(result.gazebo_xml or '')}</pre>"])
+                         paragraphs=[html_fragment("<pre>{{ xml }}</pre>", xml=result.gazebo_xml or "")])
 
 
 #: Builders of further sections, shown after the answer and before the test bench (each returns None to skip).

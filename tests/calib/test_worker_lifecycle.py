@@ -11,7 +11,7 @@ import sys
 import time
 from pathlib import Path
 
-from s2r.calib.detect import CornerCache
+from s2r.calib.detect import DETECTOR_VERSION, CornerCache
 
 
 def _children(pid: int) -> list[int]:
@@ -60,10 +60,14 @@ def test_kill_9_of_calibrate_leaves_no_orphan_worker(small_set: Path, tmp_path: 
 
 
 def test_stale_cache_temporaries_are_removed(tmp_path: Path) -> None:
-    stale, fresh = tmp_path / ".abc.json.x1.tmp", tmp_path / ".def.json.x2.tmp"
-    for path in (stale, fresh):
+    entry = f"{'ab' * 32}-9x6-v{DETECTOR_VERSION}.json"
+    stale, fresh = tmp_path / f".s2r-tmp-{entry}.x1k_9.tmp", tmp_path / f".s2r-tmp-{entry}.x2q3z.tmp"
+    foreign = tmp_path / ".notes.tmp"  # not s2r's: never deleted, however old
+    for path in (stale, fresh, foreign):
         path.write_text("{", encoding="utf-8")
     old = time.time() - 3600
-    os.utime(stale, (old, old))
+    for path in (stale, foreign):
+        os.utime(path, (old, old))
     CornerCache(tmp_path)
     assert not stale.exists() and fresh.exists()  # a fresh one may belong to a run writing right now
+    assert foreign.exists()
