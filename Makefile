@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.s2r-installed
 
-.PHONY: test demo lint typecheck pytest test-browser bench profiles calibration-sample clean
+.PHONY: test demo lint typecheck pytest test-browser test-ros bench profiles calibration-sample clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,6 +32,17 @@ clean:
 test-browser: $(STAMP)
 	@if [ ! -x /usr/bin/chromium ]; then apt-get update && apt-get install -y chromium; fi
 	$(BIN)/pytest -q -m browser tests/validate
+
+# ROS's own consumers (Debian's ROS 1) on s2r's outputs, on a loopback-only roscore: installs what is missing (as
+# root), then runs the tests marked ros. The -dev packages and libnodeletlib-tools carry the nodelet plugin
+# descriptions and nodelet's package.xml that stereo_image_proc needs to load.
+ROS_DEBS := ros-core ros-image-proc ros-stereo-image-proc libimage-proc-dev libstereo-image-proc-dev \
+	libnodeletlib-tools python3-image-geometry python3-camera-calibration-parsers python3-rosbag python3-stereo-msgs
+test-ros: $(STAMP)
+	@missing=$$(for deb in $(ROS_DEBS); do dpkg -s $$deb >/dev/null 2>&1 || echo $$deb; done); \
+	if [ -n "$$missing" ]; then apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y \
+		--no-install-recommends $$missing; fi
+	$(BIN)/pytest -q -n 0 -m ros tests/ros
 
 # The sample "recorded" calibration set of a simulated D435 unit (calibration/README.md).
 calibration-sample: $(STAMP)

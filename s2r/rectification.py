@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from s2r.errors import S2RError
 from s2r.profile import StereoProfile
 
-__all__ = ["DEFAULT_FISHEYE_FOV_DEG", "StereoRectification", "stereo_rectification"]
+__all__ = ["DEFAULT_FISHEYE_FOV_DEG", "StereoRectification", "opencv_stereo_rectify", "stereo_rectification"]
 
 FloatArray = NDArray[np.float64]
 
@@ -134,3 +134,16 @@ def stereo_rectification(
         P2=np.asarray(P2, np.float64), Q=np.asarray(Q, np.float64), image_size=tuple(out_size),  # type: ignore[arg-type]
         roi_left=tuple(int(v) for v in roi1), roi_right=tuple(int(v) for v in roi2),  # type: ignore[arg-type]
     )
+
+
+def opencv_stereo_rectify(camera_matrix1: Any, dist_coeffs1: Any, camera_matrix2: Any, dist_coeffs2: Any,
+                          image_size: Any, R: Any, T: Any, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+    """``cv2.stereoRectify`` as code written for OpenCV 4 calls it, with a flat translation accepted.
+
+    The seed tutorial's camera_configs.py passes ``T = np.array([tx, ty, tz])`` (shape (3,)); OpenCV 5 refuses
+    it (``gemm: a_size.width == len``) where OpenCV 4 took it. ``T`` (metres or any unit, 3 numbers) is passed as
+    the (3, 1) column OpenCV wants; every other argument, and the return value, is ``cv2.stereoRectify``'s.
+    """
+    column = np.asarray(T, dtype=np.float64).reshape(3, 1)
+    return tuple(cv2.stereoRectify(camera_matrix1, dist_coeffs1, camera_matrix2, dist_coeffs2, image_size, R, column,
+                                   *args, **kwargs))

@@ -93,7 +93,7 @@ def test_convert_through_kalibr_and_opencv(tmp_path: Path, capsys: pytest.Captur
 def test_convert_a_shipped_profile_by_name(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     report = _json(capsys, ["profile", "convert", "realsense_d435_1280x720", "--to", "ros", "-o", str(tmp_path),
                             "--json"])
-    assert report["outputs"] == [str(tmp_path / "left.yaml"), str(tmp_path / "right.yaml")]
+    assert report["outputs"] == [str(tmp_path / name) for name in ("left.yaml", "right.yaml", "stereo_image_proc.yaml")]
     left = yaml.safe_load((tmp_path / "left.yaml").read_text())
     assert left["image_width"] == 1280 and left["distortion_model"] == "plumb_bob"
 

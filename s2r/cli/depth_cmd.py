@@ -43,9 +43,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--num-disparities", type=int, help="disparity range in px (multiple of 16)")
     parser.add_argument("--postprocess", help=f"comma-separated stages from {','.join(STAGES)} ('' for none); "
                         "default: the preset's")
-    parser.add_argument("--alpha", type=float, default=0.0,
+    parser.add_argument("--alpha", type=float, default=None,
                         help="rectification alpha in [0, 1] (0 valid pixels only, 1 every source pixel) or -1 "
-                        "(OpenCV's default)")
+                        "(OpenCV's default); default: the preset's (seed-sgbm -1, as the seed; others 0)")
     parser.add_argument("--fov", type=float, metavar="DEG",
                         help="fisheye profiles: horizontal field of view of the rectified images in degrees "
                         "(default: OpenCV's, at most 90)")
@@ -83,7 +83,7 @@ def _cmd_depth(args: argparse.Namespace) -> int:
                          hint="drop one of them")
     if not sequence and (args.left is None or args.right is None):
         raise DepthError("missing images", field="LEFT RIGHT", hint="pass LEFT RIGHT or --left-dir/--right-dir")
-    if not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
+    if args.alpha is not None and not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
     if args.workers < 1:

@@ -189,9 +189,10 @@ def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
 
         return [dump_kalibr(profile, out, force=args.force, drop_k3=args.drop_k3)]
     if args.to == "ros":
-        from s2r.formats.ros import dump_ros_pair  # local: OpenCV (rectification) loads only when needed
+        from s2r.depth.ros_params import ros_disparity_file  # local: OpenCV (rectification) loads only when needed
+        from s2r.formats.ros import dump_ros_pair
 
-        return list(dump_ros_pair(profile, out, force=args.force))
+        return list(dump_ros_pair(profile, out, force=args.force, extra=ros_disparity_file(profile)))
     from s2r.formats.opencv import dump_opencv
 
     return [dump_opencv(profile, out, force=args.force)]

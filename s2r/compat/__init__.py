@@ -14,10 +14,14 @@ import numpy as np
 
 from s2r.depth.rectify import rectify_maps
 from s2r.profile import StereoProfile
-from s2r.rectification import stereo_rectification
+from s2r.rectification import opencv_stereo_rectify, stereo_rectification
 from s2r.registry import load_profile
 
-__all__ = ["CAMERA_CONFIG_NAMES", "SEED_ALPHA", "camera_config_values"]
+__all__ = ["CAMERA_CONFIG_NAMES", "SEED_ALPHA", "camera_config_values", "stereo_rectify"]
+
+#: ``cv2.stereoRectify`` accepting the seed's flat ``T`` (OpenCV 5 refuses a (3,) translation): code written
+#: against the tutorial can call ``s2r.compat.stereo_rectify(...)`` with the seed's own arguments.
+stereo_rectify = opencv_stereo_rectify
 
 #: The names the seed's camera_configs.py defines, in its order.
 CAMERA_CONFIG_NAMES: tuple[str, ...] = (

@@ -22,7 +22,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.depth import postprocess as pp
-from s2r.depth.presets import DEFAULT_POSTPROCESS, PRESETS, MatcherConfig, create_matcher, resolve_preset
+from s2r.depth.presets import (
+    DEFAULT_POSTPROCESS,
+    PRESETS,
+    MatcherConfig,
+    create_matcher,
+    preset_alpha,
+    resolve_preset,
+)
 from s2r.depth.rectify import RectifyMaps, rectify_maps
 from s2r.errors import DepthError
 from s2r.profile import StereoProfile
@@ -81,7 +88,8 @@ class StereoPipeline:
     Args:
         profile: a :class:`StereoProfile`, a profile name or YAML path; None uses ``S2R_PROFILE``.
         preset: one of :data:`PRESETS` (``profile`` uses the profile's own matcher settings).
-        alpha: rectification free scaling (0 only valid pixels, 1 every source pixel), as ``cv2.stereoRectify``.
+        alpha: rectification free scaling (0 only valid pixels, 1 every source pixel, -1 OpenCV's own), as
+            ``cv2.stereoRectify``; None: the preset's (``seed-sgbm``: -1, as the seed; others 0).
         num_disparities: disparity range in pixels (multiple of 16); None derives it from the profile's
             nearest working depth (``fx' * B / z_min``) or keeps the preset's fixed range.
         postprocess: stage names from :data:`s2r.depth.postprocess.STAGES`; None uses the preset's defaults.
@@ -98,7 +106,7 @@ class StereoPipeline:
         profile: StereoProfile | str | Path | None = None,
         *,
         preset: str = "profile",
-        alpha: float = 0.0,
+        alpha: float | None = 0.0,
         num_disparities: int | None = None,
         postprocess: Sequence[str] | None = None,
         resize: bool = False,
@@ -108,7 +116,7 @@ class StereoPipeline:
             raise DepthError(f"unknown preset {preset!r}", field="preset", hint=f"choose one of {', '.join(PRESETS)}")
         self.profile: StereoProfile = profile if isinstance(profile, StereoProfile) else load_profile(profile)
         self.preset = preset
-        self.alpha = float(alpha)
+        self.alpha = preset_alpha(preset, self.profile) if alpha is None else float(alpha)
         self.num_disparities = num_disparities
         self.postprocess: tuple[str, ...] = pp.check_stages(
             DEFAULT_POSTPROCESS[preset] if postprocess is None else postprocess)
@@ -170,7 +178,9 @@ class StereoPipeline:
         return cache[key]
 
     def rectify(self, left: Any, right: Any) -> tuple[Image, Image, _Geometry]:
-        """Check and rectify a raw pair (grey or BGR uint8); grey presets convert to grey BEFORE remapping."""
+        """Check and rectify a raw pair (grey or BGR uint8); grey presets convert to grey BEFORE remapping. A colour
+        preset (``seed-sgbm``) given a grey pair sees it as ``cv2.imread`` gives a grey file to the seed: three equal
+        channels, so its penalties (made for three channels) mean what they mean in the seed."""
         left, right = _as_image(left, "left"), _as_image(right, "right")
         if left.shape[:2] != right.shape[:2]:
             raise DepthError(f"left image is {left.shape[1]}x{left.shape[0]} but right is "
@@ -178,6 +188,8 @@ class StereoPipeline:
         geo = self.geometry_for((left.shape[1], left.shape[0]))
         if geo.config.channels == 1 or left.ndim != right.ndim:
             left, right = _grey(left), _grey(right)
+        elif left.ndim == 2:
+            left, right = _bgr(left), _bgr(right)
         m = geo.maps
         rl: Image = cv2.remap(left, m.left_map1, m.left_map2, cv2.INTER_LINEAR)  # type: ignore[assignment]
         rr: Image = cv2.remap(right, m.right_map1, m.right_map2, cv2.INTER_LINEAR)  # type: ignore[assignment]
@@ -309,6 +321,10 @@ def _as_image(image: Any, name: str) -> Image:
         raise DepthError(f"expected an (H, W) grey or (H, W, 3) BGR image, got shape {image.shape}", field=name,
                          hint="pass a grey or BGR image")
     return np.asarray(image, np.uint8)
+
+
+def _bgr(image: Image) -> Image:
+    return np.asarray(cv2.cvtColor(image, cv2.COLOR_GRAY2BGR), np.uint8)
 
 
 def _grey(image: Image) -> Image:

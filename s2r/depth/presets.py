@@ -19,7 +19,7 @@ from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
 from s2r.profile import MatcherSettings, StereoProfile
 
-__all__ = ["DEFAULT_POSTPROCESS", "PRESETS", "MatcherConfig", "create_matcher", "resolve_preset"]
+__all__ = ["DEFAULT_POSTPROCESS", "PRESETS", "MatcherConfig", "create_matcher", "preset_alpha", "resolve_preset"]
 
 log = logging.getLogger(__name__)
 
@@ -32,6 +32,19 @@ DEFAULT_POSTPROCESS: dict[str, tuple[str, ...]] = {
     "bm": (),
     "ros-default": (),
 }
+
+#: Rectification alpha a preset carries (``s2r depth`` without ``--alpha``; ``StereoPipeline(alpha=None)``): the
+#: seed calls ``cv2.stereoRectify`` without alpha, i.e. OpenCV's -1. Others: 0 (only valid pixels).
+PRESET_ALPHA: dict[str, float] = {"seed-sgbm": -1.0}
+
+
+def preset_alpha(preset: str, profile: StereoProfile) -> float:
+    """The rectification alpha of ``preset`` for ``profile``: :data:`PRESET_ALPHA`, else 0; 0 for a fisheye
+    (equidistant) profile, whose balance has no -1 (as s2r.compat's camera_configs)."""
+    if profile.left.distortion.model == "equidistant":
+        return 0.0
+    return PRESET_ALPHA.get(preset, 0.0)
+
 
 _SGBM_MODES = {
     "sgbm": cv2.STEREO_SGBM_MODE_SGBM,

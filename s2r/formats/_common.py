@@ -173,44 +173,84 @@ def check_rotation_field(rot: FloatArray, path: str | Path, field: str) -> Float
     return rot
 
 
+def _digits(value: float) -> tuple[int, int]:
+    """``(significant digits, decimal exponent)`` of the shortest text that reads back as ``value``: the float32
+    text when ``value`` is exactly a float32 and that text is shorter (``dt: f`` matrices widened to float64)."""
+    texts = [np.format_float_scientific(value, unique=True)]
+    if float(np.float32(value)) == value:
+        texts.append(np.format_float_scientific(np.float32(value), unique=True))
+    best = (17, 0)
+    for text in texts:
+        mantissa, _, exponent = text.lower().partition("e")
+        digits = mantissa.lstrip("-").replace(".", "").rstrip("0") or "0"
+        best = min(best, (len(digits), int(exponent)))
+    return best
+
+
 def printed_decimals(values: FloatArray) -> int:
     """The most decimals any of ``values`` was printed with (17 when one needs full float precision)."""
     most = 0
     for value in np.asarray(values, dtype=np.float64).reshape(-1):
-        text = repr(float(value))
-        if "e" in text or "E" in text:
-            mantissa, _, exponent = text.lower().partition("e")
-            digits = len(mantissa.partition(".")[2].rstrip("0")) - int(exponent)
-        else:
-            digits = len(text.partition(".")[2].rstrip("0"))
-        most = max(most, digits)
+        significant, exponent = _digits(float(value))
+        if value != 0:
+            most = max(most, significant - 1 - exponent)
     return min(most, 17)
 
 
-def rotation_as_printed(rot: FloatArray, path: str | Path, field: str, *, zero_is_identity: bool = False) -> FloatArray:
-    """A rotation read from text printed with limited decimals: re-orthonormalised (SVD) when ``|R^T R - I|`` is
-    within what that precision explains, refused (FormatError naming the field) beyond it.
+def _printed_units(values: FloatArray) -> FloatArray:
+    """Per element, one unit in the last place ``values`` were printed with, under either way of printing.
 
-    A file printing d decimals leaves each element off by up to 0.5e-d, so ``|R^T R - I|`` up to about 3e-d
-    (tolerance 4e-d, never below :data:`ORTHONORMAL_TOL`). ``zero_is_identity``: an all-zero matrix (some ROS
-    drivers publish R = 0 for an unrectified camera) is read as the identity with a warning.
+    Files print a matrix with a fixed number of decimals d (``%.6f``: every element within 0.5e-d) or with s
+    significant digits (``%g``, ORB-SLAM3's and Intel's files: each element within half a unit of its own s-th
+    digit, 0.00445005 and 0.999983 alike). Neither the text nor the float tells which, so each element gets the
+    larger of ``10^-d`` (d: the most decimals of any element) and ``10^(e - s + 1)`` (s: the most significant
+    digits of any element, e: the element's own decimal exponent): a full unit, twice the rounding error.
+    """
+    array = np.asarray(values, dtype=np.float64)
+    digits = [_digits(float(v)) for v in array.reshape(-1)]
+    significant = max(s for s, _ in digits)
+    fixed = 10.0 ** -printed_decimals(array)
+    units = [max(fixed, 10.0 ** (e - significant + 1)) if v != 0 else fixed
+             for v, (_, e) in zip(array.reshape(-1), digits, strict=True)]
+    return np.array(units, dtype=np.float64).reshape(array.shape)
+
+
+def _rotation_tolerance(rot: FloatArray) -> float:
+    """Largest ``|R^T R - I|`` a rotation printed like ``rot`` can show from rounding alone (never below
+    :data:`ORTHONORMAL_TOL`): ``sum_i |R_ij| u_ik + u_ij |R_ik|`` over the units ``u`` of :func:`_printed_units`,
+    about 2e-6 for six significant digits."""
+    units = _printed_units(rot)
+    bound = np.abs(rot).T @ units + units.T @ np.abs(rot)
+    return max(ORTHONORMAL_TOL, float(np.max(bound)))
+
+
+def rotation_as_printed(rot: FloatArray, path: str | Path, field: str, *, zero_is_identity: bool = False) -> FloatArray:
+    """A rotation read from text printed with limited precision: the nearest exact rotation (SVD) when
+    ``|R^T R - I|`` is within what that precision explains (:func:`_rotation_tolerance`), refused (FormatError
+    naming the field and the tolerance) beyond it.
+
+    The result is orthonormal to float precision, so products of such rotations (``R2^T R1`` of a ROS pair)
+    stay rotations. ``zero_is_identity``: an all-zero matrix (some ROS drivers publish R = 0 for an unrectified
+    camera) is read as the identity with a warning.
     """
     if zero_is_identity and not np.any(rot):
         log.warning("%s: %s is all zeros; read as the identity (an unrectified camera)", path, field)
         return np.eye(3)
     err = float(np.max(np.abs(rot.T @ rot - np.eye(3))))
-    if err <= ORTHONORMAL_TOL and abs(float(np.linalg.det(rot)) - 1.0) <= ORTHONORMAL_TOL:
-        return rot
-    decimals = printed_decimals(rot)
-    tol = max(ORTHONORMAL_TOL, 4.0 * 10.0 ** -decimals)
+    tol = _rotation_tolerance(rot)
     if err > tol or float(np.linalg.det(rot)) <= 0:
-        return check_rotation_field(rot, path, field)  # raises with the measured error
+        if err > tol:
+            raise FormatError(f"not a rotation: max |R^T R - I| = {err:.2e}, beyond the {tol:.1e} its printed "
+                              "precision explains", path=path, field=field,
+                              hint="the matrix must be orthonormal to the digits it is printed with")
+        return check_rotation_field(rot, path, field)  # raises: a reflection
     u, _, vt = np.linalg.svd(rot)
     fixed = np.asarray(u @ vt, dtype=np.float64)
     change = float(np.max(np.abs(fixed - rot)))
-    level = logging.WARNING if change > 1e-4 else logging.INFO
-    log.log(level, "%s: %s re-orthonormalised: max |R^T R - I| = %.2e, as expected from %d printed decimals "
-            "(largest element change %.2e)", path, field, err, decimals, change)
+    if change > 1e-9:  # more than float noise: say so (a warning when a printed digit moves)
+        level = logging.WARNING if change > 1e-4 else logging.INFO
+        log.log(level, "%s: %s re-orthonormalised: max |R^T R - I| = %.2e, within the %.1e its printed precision "
+                "explains (largest element change %.2e)", path, field, err, tol, change)
     return check_rotation_field(fixed, path, field)
 
 

@@ -7,7 +7,8 @@ entity expansion), then validates every ``opencv-matrix``: ``rows``, ``cols``, `
 sizes positive and at most :data:`MAX_MATRIX_ELEMENTS`, ``len(data) == rows * cols * channels``.
 
 Top-level node values come back as: ``str``; ``float`` (numbers); ``numpy.ndarray`` float64 (matrices as
-``rows x cols`` or ``rows x cols x channels``, flat sequences of numbers as 1-D); None for anything else
+``rows x cols`` or ``rows x cols x channels``, flat sequences of numbers as 1-D, an empty ``data: []`` placeholder
+as an empty array); None for anything else
 (nested maps, mixed sequences), which s2r's readers ignore.
 """
 
@@ -130,6 +131,8 @@ def _matrix(fields: dict[str, Any], path: Path, key: str) -> NDArray[np.float64]
         raise FormatError(f"unknown element type {str(fields['dt'])[:20]!r} (expected e.g. d, f, i, u, 3d)",
                           path=path, field=f"{key}.dt")
     channels = int(match.group(1) or 1)
+    if fields["data"] is None or fields["data"] == [] or (isinstance(fields["data"], str) and not fields["data"]):
+        return np.zeros((0,), dtype=np.float64)  # a placeholder (ORB-SLAM2 templates): each reader decides
     expected = rows * cols * channels
     if expected > MAX_MATRIX_ELEMENTS:
         raise FormatError(f"matrix of {expected} elements is larger than {MAX_MATRIX_ELEMENTS}", path=path,

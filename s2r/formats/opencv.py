@@ -33,7 +33,6 @@ from s2r.formats._common import (
     as_matrix,
     build_camera,
     build_stereo,
-    check_rotation_field,
     distortion_for,
     provenance_for,
     rotation_as_printed,
@@ -202,7 +201,7 @@ def _rotation(nodes: dict[str, NodeValue | None], path: Path) -> FloatArray | No
         return None
     if value.size == 3:  # a Rodrigues rotation vector
         value = np.asarray(cv2.Rodrigues(value.reshape(3, 1))[0], dtype=np.float64)
-    return check_rotation_field(as_matrix(value.tolist(), (3, 3), path, "R"), path, "R")
+    return rotation_as_printed(as_matrix(value.tolist(), (3, 3), path, "R"), path, "R")
 
 
 def _rectified(nodes: dict[str, NodeValue | None], path: Path) -> tuple[FloatArray, FloatArray] | None:

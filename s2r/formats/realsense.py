@@ -27,10 +27,10 @@ from s2r.formats._common import (
     as_float,
     build_camera,
     build_stereo,
-    check_rotation_field,
     distortion_for,
     provenance_for,
     read_text,
+    rotation_as_printed,
 )
 from s2r.profile import Camera, StereoProfile
 
@@ -208,14 +208,6 @@ def _camera(intr: RealSenseIntrinsic, path: Path, frame_id: str) -> Camera:
                         frame_id=frame_id)
 
 
-def _orthonormalised(R: FloatArray) -> FloatArray:
-    """The nearest rotation to a matrix printed with ~6 significant digits (left alone when far off)."""
-    if float(np.max(np.abs(R.T @ R - np.eye(3)))) > 1e-3:
-        return R
-    u, _, vt = np.linalg.svd(R)
-    return np.asarray(u @ vt, dtype=np.float64)
-
-
 def _stereo_extrinsics(extrinsics: list[RealSenseExtrinsic], left: str, right: str,
                        path: Path) -> tuple[FloatArray, FloatArray]:
     """OpenCV ``(R, T)`` from the ``left -> right`` extrinsic, choosing the printed-or-transposed reading."""
@@ -224,7 +216,7 @@ def _stereo_extrinsics(extrinsics: list[RealSenseExtrinsic], left: str, right: s
         raise FormatError("extrinsic block is missing", path=path, field=f'Extrinsic from "{left}" To "{right}"',
                           hint="save the full output of `rs-enumerate-devices -c`")
     field = f'line {forward.line} Extrinsic from "{left}" To "{right}": Rotation Matrix'
-    R = check_rotation_field(_orthonormalised(forward.R), path, field)
+    R = rotation_as_printed(forward.R, path, field)
     reverse = next((e for e in extrinsics if (e.source, e.target) == (right, left)), None)
     if reverse is not None:
         as_printed = float(np.linalg.norm(reverse.t + R.T @ forward.t))

@@ -8,18 +8,32 @@ the left one's 0.
 Import inverts this: with ``P = K' [I | t]`` for each camera, points in the rectified frame satisfy
 ``R2 X_right = R1 X_left + (t2 - t1)``, so ``R = R2^T R1`` and ``T = R2^T (t2 - t1)`` (OpenCV convention,
 ``X_right = R X_left + T``, metres as in P's Tx).
+
+What ROS's own nodes need of the exported pair (Debian's ROS 1, image_pipeline 1.17, image_geometry 1.16):
+- image_proc's rectify nodelet passes ``image_raw`` through untouched when every coefficient of D is exactly 0,
+  and image_geometry's C++ PinholeCameraModel then treats the camera as undistorted (R and P ignored). A pair
+  with zero distortion but a rectifying rotation (any real pair: a D435's factory calibration reports zero
+  coefficients) would come out unrectified. Export then writes the last coefficient (k3, k6 or k4) as
+  :data:`ZERO_DISTORTION_MARKER`: non-zero for those checks, yet ``1 + 1e-20 r^6`` is exactly 1 in double
+  precision for every ray within 78 deg of the axis, so OpenCV's maps are bit-identical to zero distortion.
+- stereo_image_proc asserts that the left and right camera_info share one frame_id: both carry the left
+  camera's (the rectified pair's P is expressed in it).
+- What camera_info cannot say (the pixel convention, the matcher settings with num_disparities and the depth
+  range, the frame_id, the marker) goes in an ``s2r:`` mapping that camera_calibration_parsers ignores and
+  s2r reads back, so s2r -> ROS -> s2r keeps them.
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 from numpy.typing import NDArray
+from pydantic import ValidationError
 
 from s2r.errors import FormatError
 from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
@@ -38,10 +52,12 @@ from s2r.formats._common import (
     rotation_as_printed,
 )
 from s2r.formats.filestorage import read_filestorage
+from s2r.formats.s2r_yaml import validation_message
 from s2r.geometry import baseline_layout_problem
-from s2r.profile import Camera, StereoProfile
+from s2r.profile import Camera, MatcherSettings, StereoProfile
 
 __all__ = [
+    "ZERO_DISTORTION_MARKER",
     "RosCameraInfo",
     "camera_info_to_yaml",
     "dump_ros_pair",
@@ -53,6 +69,11 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
+#: The last distortion coefficient written for a camera with zero distortion and a rectifying R or P != K
+#: (see the module docstring): image_proc rectifies only when some coefficient is non-zero.
+ZERO_DISTORTION_MARKER = 1e-20
+#: Pixel conventions the ``s2r:`` block may name (s2r.profile.Convention).
+_CONVENTIONS = ("gazebo-classic", "gz-sim", "exact", "opencv")
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +82,7 @@ class RosCameraInfo:
 
     ``R`` rotates the camera's optical frame into the rectified frame; ``P = K' [I | t]`` projects
     rectified-frame points (metres) to rectified pixels; a rectified right camera has ``P[0, 3] = -fx' B``.
+    ``s2r`` holds what camera_info cannot say (``convention``, ``matcher``, ``frame_id``, ``zero_distortion``).
     """
 
     camera_name: str
@@ -72,6 +94,7 @@ class RosCameraInfo:
     R: FloatArray
     P: FloatArray
     frame_id: str = ""
+    s2r: dict[str, Any] = field(default_factory=dict)
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -173,18 +196,49 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
     if not isinstance(model, str):
         raise FormatError(f"expected a model name, got {type(model).__name__}", path=source, field=keys["model"])
     coeffs = _coefficients(data, keys["D"], source)
+    extra = _s2r_block(data, source)
+    if extra.get("zero_distortion") is True and coeffs and coeffs[-1] == ZERO_DISTORTION_MARKER:
+        coeffs[-1] = 0.0  # the marker s2r wrote so image_proc rectifies: the camera has no distortion
     distortion = distortion_for(model, coeffs, source, keys["D"])
     R = rotation_as_printed(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"], zero_is_identity=True)
     P = _matrix_field(data, keys["P"], (3, 4), source)
     build_camera(K=K, size=(width, height), distortion=distortion, path=source, field=keys["K"])
     header = data.get("header")
-    frame_id = header.get("frame_id", "") if isinstance(header, dict) else ""
+    frame_id = header.get("frame_id", "") if isinstance(header, dict) else extra.get("frame_id", "")
     name = data.get("camera_name", "")
     return RosCameraInfo(
         camera_name=name if isinstance(name, str) else str(name), width=width, height=height, K=K,
         D=np.array(distortion.coefficients, dtype=np.float64), distortion_model=model, R=R, P=P,
-        frame_id=frame_id if isinstance(frame_id, str) else str(frame_id),
+        frame_id=frame_id if isinstance(frame_id, str) else str(frame_id), s2r=extra,
     )
+
+
+def _s2r_block(data: dict[Any, Any], path: Path) -> dict[str, Any]:
+    """The ``s2r:`` mapping s2r's export adds (absent in other files): checked, unknown keys ignored."""
+    block = data.get("s2r")
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise FormatError(f"expected a mapping, got {type(block).__name__}", path=path, field="s2r")
+    out: dict[str, Any] = {}
+    convention = block.get("convention")
+    if convention is not None:
+        if convention not in _CONVENTIONS:
+            raise FormatError(f"unknown pixel convention {convention!r} (one of {', '.join(_CONVENTIONS)})",
+                              path=path, field="s2r.convention")
+        out["convention"] = convention
+    if block.get("matcher") is not None:
+        try:
+            out["matcher"] = MatcherSettings.model_validate(block["matcher"])
+        except ValidationError as exc:
+            loc, msg = validation_message(exc)
+            raise FormatError(msg, path=path, field=f"s2r.matcher.{loc}") from None
+    for key, kind in (("frame_id", str), ("zero_distortion", bool)):
+        if block.get(key) is not None:
+            if not isinstance(block[key], kind):
+                raise FormatError(f"expected a {kind.__name__}", path=path, field=f"s2r.{key}")
+            out[key] = block[key]
+    return out
 
 
 def _rectified_offset(info: RosCameraInfo, path: Path, field: str) -> FloatArray:
@@ -228,11 +282,28 @@ def load_ros_pair(
         log.warning("%s: the second camera sits to the LEFT of the first (T_x = %+.4f m); pass the left camera's "
                     "file first", rpath, T[0])
     base = name or (left.camera_name.split("/")[0] if left.camera_name else lpath.parent.name or lpath.stem)
-    return build_stereo(
+    profile = build_stereo(
         name=base, left=_camera(left, lpath), right=_camera(right, rpath), R=R, T=T, path=rpath,
         provenance=provenance_for([lpath, rpath], "ROS camera_info", origin=origin),
         description=f"imported from ROS camera_info {lpath.name} + {rpath.name}",
     )
+    return _with_s2r_block(profile, left.s2r, rpath)
+
+
+def _with_s2r_block(profile: StereoProfile, block: dict[str, Any], path: Path) -> StereoProfile:
+    """The profile with the pixel convention and matcher settings s2r's export kept in the ``s2r:`` block."""
+    if not block.get("convention") and "matcher" not in block:
+        return profile
+    data = profile.model_dump()
+    if block.get("convention"):
+        data["provenance"]["convention"] = block["convention"]
+    if "matcher" in block:
+        data["matcher"] = block["matcher"].model_dump()
+    try:
+        return StereoProfile.model_validate(data)
+    except ValidationError as exc:
+        loc, msg = validation_message(exc)
+        raise FormatError(msg, path=path, field=f"s2r: {loc}") from None
 
 
 def ros_pair_from_profile(profile: StereoProfile, *, alpha: float = 0.0) -> tuple[RosCameraInfo, RosCameraInfo]:
@@ -252,13 +323,31 @@ def ros_pair_from_profile(profile: StereoProfile, *, alpha: float = 0.0) -> tupl
         raise FormatError(f"rectification gives fx' = {fx_rect:.6g} px and Tx = {tx:.6g} (raw fx {fx_raw:.6g} px): "
                           "the camera_info would be unusable", field="extrinsics",
                           hint="check the profile's R and T: the cameras must look the same way, side by side")
+    frame_id = profile.left.frame_id or profile.right.frame_id  # one frame for both: stereo_image_proc asserts it
+    block: dict[str, Any] = {"convention": profile.provenance.convention, "frame_id": frame_id,
+                             "matcher": profile.matcher.model_dump(mode="json")}
     infos = []
     for side, cam, R, P in (("left", profile.left, rect.R1, rect.P1), ("right", profile.right, rect.R2, rect.P2)):
+        D, marked = _rectifiable_distortion(cam, R, P)
         infos.append(RosCameraInfo(
-            camera_name=f"{profile.name}/{side}", width=cam.width_px, height=cam.height_px, K=cam.K, D=cam.D,
-            distortion_model=cam.distortion.model, R=R, P=P, frame_id=cam.frame_id,
+            camera_name=f"{profile.name}/{side}", width=cam.width_px, height=cam.height_px, K=cam.K, D=D,
+            distortion_model=cam.distortion.model, R=R, P=P, frame_id=frame_id,
+            s2r={**block, "zero_distortion": True} if marked else dict(block),
         ))
     return infos[0], infos[1]
+
+
+def _rectifiable_distortion(cam: Camera, R: FloatArray, P: FloatArray) -> tuple[FloatArray, bool]:
+    """``(D, marked)``: the camera's coefficients, the last one set to :data:`ZERO_DISTORTION_MARKER` when all are
+    zero yet rectification moves pixels (R is not the identity or P's 3x3 block differs from K), so image_proc
+    and image_geometry rectify instead of passing the raw image through."""
+    D = np.array(cam.D, dtype=np.float64)
+    identity = np.allclose(R, np.eye(3), rtol=0.0, atol=1e-12) and np.allclose(P[:, :3], cam.K, rtol=1e-12,
+                                                                                 atol=1e-9)
+    if np.any(D != 0.0) or identity:
+        return D, False
+    D[-1] = ZERO_DISTORTION_MARKER
+    return D, True
 
 
 def _matrix_block(array: FloatArray) -> dict[str, Any]:
@@ -268,28 +357,35 @@ def _matrix_block(array: FloatArray) -> dict[str, Any]:
 
 def camera_info_to_yaml(info: RosCameraInfo) -> str:
     """The camera_calibration_parsers YAML text of ``info`` (numbers at full float precision)."""
-    data = {
+    data: dict[str, Any] = {
         "image_width": info.width, "image_height": info.height, "camera_name": info.camera_name,
         "camera_matrix": _matrix_block(info.K), "distortion_model": info.distortion_model,
         "distortion_coefficients": _matrix_block(info.D), "rectification_matrix": _matrix_block(info.R),
         "projection_matrix": _matrix_block(info.P),
     }
-    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=1000)
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=1000)
+    if not info.s2r:
+        return text
+    note = ("# s2r: what camera_info cannot say (ROS ignores it, s2r reads it back)."
+            + (f" The last distortion coefficient {ZERO_DISTORTION_MARKER:g} stands for 0: image_proc rectifies "
+               "only when some coefficient is non-zero." if info.s2r.get("zero_distortion") else "") + "\n")
+    return text + note + yaml.safe_dump({"s2r": info.s2r}, sort_keys=False, default_flow_style=None, width=1000)
 
 
 def dump_ros_pair(
-    profile: StereoProfile, folder: str | Path, *, force: bool = False, alpha: float = 0.0
-) -> tuple[Path, Path]:
-    """Write ``left.yaml`` and ``right.yaml`` (rectified camera_info) into ``folder``, both or neither; refuse to
-    overwrite."""
+    profile: StereoProfile, folder: str | Path, *, force: bool = False, alpha: float = 0.0,
+    extra: dict[str, str] | None = None,
+) -> tuple[Path, ...]:
+    """Write ``left.yaml`` and ``right.yaml`` (rectified camera_info), then each ``extra`` file (name -> text),
+    into ``folder``, all or none (staged, then published together); none overwritten without ``force``."""
     out = Path(folder)
-    targets = (out / "left.yaml", out / "right.yaml")
-    for target in targets:
-        check_output_free(target, force=force)
+    texts = dict(zip(("left.yaml", "right.yaml"), (camera_info_to_yaml(info) for info in ros_pair_from_profile(
+        profile, alpha=alpha)), strict=True))
+    texts.update(extra or {})
+    for name in texts:
+        check_output_free(out / name, force=force)
     prepare_output_dir(out, force=True)
-    left, right = ros_pair_from_profile(profile, alpha=alpha)
     with OutputBatch(force=force, root=out) as batch:
-        batch.add_text(targets[0], camera_info_to_yaml(left))
-        batch.add_text(targets[1], camera_info_to_yaml(right))
-        batch.publish()
-    return targets
+        for name, text in texts.items():
+            batch.add_text(out / name, text)
+        return tuple(batch.publish())

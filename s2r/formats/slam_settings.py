@@ -19,7 +19,9 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +44,7 @@ from s2r.profile import Camera, Distortion, StereoProfile
 
 __all__ = ["SETTINGS_FLAVOURS", "flavour_of", "load_settings"]
 
+log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
 Nodes = Mapping[str, Any]
 ReadNodes = Callable[[Path], dict[str, Any]]
@@ -172,27 +175,110 @@ def _orbslam3_old(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tup
             invert_transform(T_l_r), "Tlr (pose of the right camera in the left one, inverted)")
 
 
-def _orbslam2(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[Camera, Camera, FloatArray, str]:
-    if "Camera2.fx" in nodes and "Tlr" in nodes:
-        return _orbslam3_old(nodes, path, hint)
-    if "LEFT.K" in nodes and "RIGHT.K" in nodes:
-        left, R1, P1 = _orbslam2_side(nodes, "LEFT", path)
-        right, R2, P2 = _orbslam2_side(nodes, "RIGHT", path)
-        t1 = _rectified_offset(P1[:, :3], P1, path, "LEFT.P")
-        t2 = _rectified_offset(P2[:, :3], P2, path, "RIGHT.P")
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = R2.T @ R1, R2.T @ (t2 - t1)
-        return left, right, T, "LEFT/RIGHT R and P (as ROS camera_info)"
-    if "Camera.bf" not in nodes:
-        raise FormatError("holds one camera (no Camera.bf, no LEFT/RIGHT): a monocular ORB-SLAM settings file",
-                          path=path, field="Camera.bf", hint="a stereo profile needs the stereo settings file")
+@dataclass(frozen=True)
+class _Block:
+    """One reading of ORB-SLAM2 settings: the pair, how its extrinsics were found, and what ORB-SLAM's tracker
+    sees of it (rectified image size in pixels, fx' in pixels, bf = fx' * baseline in pixel metres)."""
+
+    left: Camera
+    right: Camera
+    T: FloatArray
+    how: str
+    size: tuple[int, int]
+    fx: float
+    bf: float
+
+    def describe(self) -> str:
+        """``752x480, fx 435.205, bf 47.906 (B 110.1 mm)``."""
+        return (f"{self.size[0]}x{self.size[1]}, fx {self.fx:.6g}, bf {self.bf:.6g} "
+                f"(B {1000 * self.bf / self.fx:.1f} mm)")
+
+
+def _is_placeholder(value: Any) -> bool:
+    """An empty node: ``LEFT.height:`` with no value, or an opencv-matrix with ``data: []``."""
+    return value is None or (isinstance(value, np.ndarray) and value.size == 0) or \
+        (isinstance(value, str) and not value.strip())
+
+
+def _leftright_state(nodes: Nodes) -> str:
+    """``absent`` (no LEFT./RIGHT. node), ``empty`` (every one a placeholder) or ``filled``."""
+    values = [v for k, v in nodes.items() if k.startswith(("LEFT.", "RIGHT."))]
+    if not values:
+        return "absent"
+    return "empty" if all(_is_placeholder(v) for v in values) else "filled"
+
+
+def _leftright(nodes: Nodes, path: Path) -> _Block:
+    """The raw pair from ``LEFT/RIGHT.K D R P`` (as ROS camera_info: ``R = R2^T R1``, ``T = R2^T (t2 - t1)``)."""
+    left, R1, P1 = _orbslam2_side(nodes, "LEFT", path)
+    right, R2, P2 = _orbslam2_side(nodes, "RIGHT", path)
+    t1 = _rectified_offset(P1[:, :3], P1, path, "LEFT.P")
+    t2 = _rectified_offset(P2[:, :3], P2, path, "RIGHT.P")
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R2.T @ R1, R2.T @ (t2 - t1)
+    return _Block(left, right, T, "LEFT/RIGHT R and P (as ROS camera_info)", left.image_size, float(P1[0, 0]),
+                  float(P1[0, 3] - P2[0, 3]))
+
+
+def _camera_bf(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> _Block:
+    """One camera ``Camera.fx/fy/cx/cy[/k1 k2 p1 p2 k3]`` for both images (row-aligned once undistorted, as
+    ORB-SLAM2's tracker assumes), ``R = I`` and ``T = (-bf / fx, 0, 0)`` metres."""
     fx = _num(nodes, "Camera.fx", path)
     K = _K(fx, _num(nodes, "Camera.fy", path), _num(nodes, "Camera.cx", path), _num(nodes, "Camera.cy", path))
     size = _size(nodes, "Camera.width", "Camera.height", path, hint)
-    camera = build_camera(K=K, size=size, distortion=Distortion(), path=path, field="Camera.fx")
+    coeffs = [_num(nodes, "Camera." + k, path) if "Camera." + k in nodes else 0.0 for k in ("k1", "k2", "p1", "p2",
+                                                                                              "k3")]
+    distortion = distortion_for("plumb_bob", coeffs, path, "Camera.k1")
+    camera = build_camera(K=K, size=size, distortion=distortion, path=path, field="Camera.fx")
+    bf = _num(nodes, "Camera.bf", path)
     T = np.eye(4)
-    T[0, 3] = -_num(nodes, "Camera.bf", path) / fx
-    return camera, camera, T, "Camera.bf / Camera.fx (already rectified images)"
+    T[0, 3] = -bf / fx
+    return _Block(camera, camera, T, "Camera.bf / Camera.fx (row-aligned images)", size, fx, bf)
+
+
+def _agree(a: _Block, b: _Block) -> bool:
+    """Same image size, fx and bf within 0.1 % (the comment in ORB-SLAM's EuRoC file: "Camera.fx, .fy, etc must
+    be the same as in LEFT.P")."""
+    return a.size == b.size and abs(a.fx - b.fx) <= 1e-3 * b.fx and abs(a.bf - b.bf) <= 1e-3 * abs(b.bf)
+
+
+def _attempt(read: Callable[[], _Block]) -> tuple[_Block | None, FormatError | None]:
+    try:
+        return read(), None
+    except FormatError as exc:
+        return None, exc
+
+
+def _orbslam2(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[Camera, Camera, FloatArray, str]:
+    """ORB-SLAM2 settings: the ``LEFT/RIGHT`` raw pair when it agrees with ``Camera.*`` (or ``Camera.*`` is
+    incomplete), else the ``Camera.*`` + ``Camera.bf`` block that ORB-SLAM's tracker uses, with a warning naming
+    the disagreement (leftover EuRoC ``LEFT/RIGHT`` blocks are common). Empty placeholders are skipped."""
+    if "Camera2.fx" in nodes and "Tlr" in nodes:
+        return _orbslam3_old(nodes, path, hint)
+    state = _leftright_state(nodes)
+    pair, pair_error = _attempt(lambda: _leftright(nodes, path)) if state == "filled" else (None, None)
+    block, block_error = _attempt(lambda: _camera_bf(nodes, path, hint)) if "Camera.bf" in nodes else (None, None)
+    if pair is not None and (block is None or _agree(pair, block)):
+        if block_error is not None:
+            log.warning("%s: Camera.* is incomplete (%s: %s); using the LEFT/RIGHT blocks (%s)", path,
+                        block_error.field, block_error.message, pair.describe())
+        return pair.left, pair.right, pair.T, pair.how
+    if block is not None:
+        if pair is not None:
+            log.warning("%s: the LEFT/RIGHT blocks (%s) disagree with Camera.* (%s); using Camera.*, the camera "
+                        "ORB-SLAM tracks with (LEFT/RIGHT only pre-rectify the images: fix or delete them)", path,
+                        pair.describe(), block.describe())
+        elif pair_error is not None:
+            log.warning("%s: the LEFT/RIGHT blocks are unusable (%s: %s); using Camera.* (%s)", path,
+                        pair_error.field, pair_error.message, block.describe())
+        elif state == "empty":
+            log.info("%s: the LEFT/RIGHT blocks are empty placeholders; using Camera.* (%s)", path, block.describe())
+        return block.left, block.right, block.T, block.how
+    error = pair_error or block_error
+    if error is not None:
+        raise error
+    raise FormatError("holds one camera (no Camera.bf, no LEFT/RIGHT): a monocular ORB-SLAM settings file",
+                      path=path, field="Camera.bf", hint="a stereo profile needs the stereo settings file")
 
 
 def _camodocal(nodes: Nodes, path: Path) -> tuple[Camera, str]:

@@ -106,7 +106,8 @@ def test_grey_and_colour_inputs(pair: SynthPair, small_rig: StereoProfile) -> No
     seed_colour = StereoPipeline(small_rig, preset="seed-sgbm").compute(*bgr)
     assert seed_colour.rect_left.ndim == 3  # the seed matches colour images
     seed_grey = StereoPipeline(small_rig, preset="seed-sgbm").compute(pair.left, pair.right)
-    assert seed_grey.rect_left.ndim == 2
+    assert seed_grey.rect_left.ndim == 3  # a grey pair as the seed's cv2.imread gives it: three equal channels
+    np.testing.assert_array_equal(seed_grey.disparity, seed_colour.disparity)
     assert np.nanmedian(seed_grey.disparity[60:180, 164:236]) == pytest.approx(30, abs=0.1)
 
 

@@ -78,8 +78,9 @@ def test_written_yaml_has_the_parsers_layout(tmp_path: Path) -> None:
     left, _ = ros_pair_from_profile(make_rig(name="cam"))
     data = yaml.safe_load(camera_info_to_yaml(left))
     assert list(data) == ["image_width", "image_height", "camera_name", "camera_matrix", "distortion_model",
-                          "distortion_coefficients", "rectification_matrix", "projection_matrix"]
+                          "distortion_coefficients", "rectification_matrix", "projection_matrix", "s2r"]
     assert data["camera_matrix"]["rows"] == 3 and data["projection_matrix"]["cols"] == 4
+    assert data["s2r"]["convention"] == "exact" and data["s2r"]["matcher"]["algorithm"] == "sgbm"
     assert data["distortion_coefficients"] == {"rows": 1, "cols": 5, "data": [0.0] * 5}
     assert data["camera_name"] == "cam/left"
 
