@@ -30,6 +30,9 @@ if TYPE_CHECKING:
 
 __all__ = ["register"]
 
+#: Frames shown with their images in the HTML report (the tables list every frame).
+REPORT_FRAMES = 40
+
 
 def register(sub: Any) -> None:
     """Add ``s2r depth-quality``."""
@@ -130,11 +133,13 @@ def _measure(args: argparse.Namespace, profile: StereoProfile) -> QualityResult:
     source_of = _bag_views if args.bag is not None else _folder_views
     views, total, fb, source, visible = source_of(args, profile)
     bar = ProgressBar(enabled=False if (args.quiet or args.json) else None)
+    keep = REPORT_FRAMES if args.report else 0
     if args.wall:
         return measure_wall_views(profile, views, fb_px_m=fb, source=f"{source}, flat wall",
-                                  roi_fraction=args.roi, distance_m=args.distance, progress=bar, total=total)
+                                  roi_fraction=args.roi, distance_m=args.distance, progress=bar, total=total,
+                                  keep_images=keep)
     return measure_board_views(profile, views, pattern=args.pattern, square_m=args.square, fb_px_m=fb,
-                               source=source, total=total, visible_m=visible, progress=bar)
+                               source=source, total=total, visible_m=visible, progress=bar, keep_images=keep)
 
 
 def _cmd_depth_quality(args: argparse.Namespace) -> int:
@@ -147,7 +152,9 @@ def _cmd_depth_quality(args: argparse.Namespace) -> int:
         check_output_free(Path(args.report) / "depth_quality.html", force=args.force)
     result = _measure(args, profile)
     if args.json:
-        print_json(result.as_dict())
+        from s2r.quality.report import verdict
+
+        print_json({**result.as_dict(), "verdict": verdict(result).as_dict()})
     else:
         print("\n".join(quality_lines(result)))
     if args.report:
