@@ -145,11 +145,11 @@ def frame_quality(image: str, depth_m: FloatArray, rays: FloatArray, *, fb_px_m:
     inliers = fit.inliers
     outlier_pct = 100.0 * (n_valid - int(inliers.sum())) / n_valid
     base = replace(base, outlier_pct=outlier_pct, inlier_pixels=int(inliers.sum()))
+    if outlier_pct > MAX_OUTLIER_PCT:
+        return not_scored(base, f"mismatches dominate: {outlier_pct:.0f} % of the valid pixels lie off the plane")
     if inliers.sum() < MIN_FIT_PIXELS:
         return not_scored(base, f"too few valid pixels: {int(inliers.sum())} inliers remain of {n_valid} valid "
                                 f"(a plane fit needs {MIN_FIT_PIXELS})")
-    if outlier_pct > MAX_OUTLIER_PCT:
-        return not_scored(base, f"mismatches dominate: {outlier_pct:.0f} % of the valid pixels lie off the plane")
     if require_plane:
         problem = planarity_problem(z, xy, fit, fb_px_m=fb_px_m)
         if problem:

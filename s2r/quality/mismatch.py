@@ -97,26 +97,40 @@ def robust_plane(z: FloatArray, xy: FloatArray, *, fb_px_m: float, keep: BoolArr
     return PlaneFit(plane, inliers, sigma, band)
 
 
+def _pixel_noise(resid: FloatArray) -> float:
+    """Robust noise of residuals listed in image order (row-major): 1.4826 x the median absolute difference of
+    neighbours / sqrt(2). A second surface or a mis-fitted plane moves neighbours together, so neither inflates
+    it (the global spread of the residuals would take the structure for noise)."""
+    steps = np.diff(resid)
+    steps = steps[np.isfinite(steps)]
+    return 1.4826 * float(np.median(np.abs(steps))) / np.sqrt(2.0) if steps.size else 0.0
+
+
 def planarity_problem(z: FloatArray, xy: FloatArray, fit: PlaneFit, *, fb_px_m: float) -> str:
     """Why the valid pixels (``z`` (N,) metres on rays ``xy`` (N, 2)) are not one plane, or "" when they are.
 
     The region is cut into ``PLANARITY_TILES`` x ``PLANARITY_TILES`` tiles of equal pixel counts (quantiles of x
     and y); a tile whose median disparity residual to the inlier plane exceeds ``max(PLANARITY_FLOOR_PX, 5
-    sigma)`` holds another surface (a step, an object, a corner of the room)."""
+    sigma)``, sigma the pixel-to-pixel noise (:func:`_pixel_noise`), holds another surface (a step, an object, a
+    corner of the room)."""
     resid = disparity_residuals(z, xy, fit.plane, fb_px_m=fb_px_m)
     edges_x = np.quantile(xy[:, 0], np.linspace(0, 1, PLANARITY_TILES + 1))
     edges_y = np.quantile(xy[:, 1], np.linspace(0, 1, PLANARITY_TILES + 1))
     col = np.clip(np.searchsorted(edges_x, xy[:, 0], side="right") - 1, 0, PLANARITY_TILES - 1)
     row = np.clip(np.searchsorted(edges_y, xy[:, 1], side="right") - 1, 0, PLANARITY_TILES - 1)
-    limit = max(PLANARITY_FLOOR_PX, BAND_SIGMAS * (fit.sigma_px if np.isfinite(fit.sigma_px) else 0.0))
     least = max(20, z.size // (4 * PLANARITY_TILES**2))
-    worst, where = 0.0, (0, 0)
+    medians: dict[tuple[int, int], float] = {}
     for r in range(PLANARITY_TILES):
         for c in range(PLANARITY_TILES):
             values = resid[(row == r) & (col == c)]
             values = values[np.isfinite(values)]
-            if values.size >= least and abs(float(np.median(values))) > abs(worst):
-                worst, where = float(np.median(values)), (r, c)
+            if values.size >= least:
+                medians[(r, c)] = float(np.median(values))
+    if not medians:
+        return ""
+    limit = max(PLANARITY_FLOOR_PX, BAND_SIGMAS * _pixel_noise(resid))
+    where = max(medians, key=lambda k: abs(medians[k]))
+    worst = medians[where]
     if abs(worst) <= limit:
         return ""
     return (f"tile (row {where[0] + 1}, column {where[1] + 1}) of a {PLANARITY_TILES}x{PLANARITY_TILES} grid sits "
