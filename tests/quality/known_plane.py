@@ -55,13 +55,15 @@ def rotation(yaw_deg: float, pitch_deg: float) -> FloatArray:
 
 def _board_coords(cam: Camera, R: FloatArray, t: FloatArray, u: FloatArray, v: FloatArray
                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Where each pixel ray (pixel coordinates u, v) meets the board plane: board x, y (m) and camera depth z."""
-    rays = np.stack([(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, np.ones_like(u)])
-    n = R[:, 2]
-    z = (n @ t) / np.tensordot(n, rays, axes=1)
-    points = rays * z - t.reshape(3, *([1] * u.ndim))
-    local = np.tensordot(R.T, points, axes=1)
-    return local[0], local[1], z
+    """Where each pixel ray (pixel coordinates u, v) meets the board plane: board x, y (m) through the inverse of
+    the plane's homography ``K [r1 r2 t]``, and the camera depth z of that point."""
+    K = np.array([[cam.fx, 0, cam.cx], [0, cam.fy, cam.cy], [0, 0, 1]])
+    h = np.linalg.inv(K @ np.column_stack([R[:, 0], R[:, 1], t]))
+    w = h[2, 0] * u + h[2, 1] * v + h[2, 2]
+    bx = (h[0, 0] * u + h[0, 1] * v + h[0, 2]) / w
+    by = (h[1, 0] * u + h[1, 1] * v + h[1, 2]) / w
+    z = R[2, 0] * bx + R[2, 1] * by + t[2]
+    return bx, by, z
 
 
 def _texture(bx: FloatArray, by: FloatArray, pattern: tuple[int, int], square: float) -> FloatArray:
