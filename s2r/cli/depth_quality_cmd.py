@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -26,9 +25,13 @@ from s2r.fileio import check_output_free, prepare_output_dir
 
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
-    from s2r.quality.run import DepthView, QualityResult
+    from s2r.quality.run import QualityResult
+    from s2r.quality.source import RecordingSource
 
 __all__ = ["register"]
+
+#: Frames shown with their images in the HTML report (the tables list every frame).
+REPORT_FRAMES = 40
 
 
 def register(sub: Any) -> None:
@@ -64,6 +67,16 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=_cmd_depth_quality)
 
 
+def _source(args: argparse.Namespace) -> RecordingSource:
+    """The recording named by the options (checked by :func:`_check_args`)."""
+    from s2r.quality.source import RecordingSource
+
+    return RecordingSource(left=args.left, right=args.right, depth=args.depth,
+                           bag=None if args.bag is None else str(args.bag), left_topic=args.left_topic,
+                           right_topic=args.right_topic, depth_topic=args.depth_topic, max_dt_s=args.max_dt,
+                           depth_scale_m=args.depth_scale)
+
+
 def _check_args(args: argparse.Namespace) -> None:
     stereo = args.right is not None or args.right_topic is not None
     device = args.depth is not None or args.depth_topic is not None
@@ -89,65 +102,36 @@ def _check_args(args: argparse.Namespace) -> None:
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
 
 
-def _folder_views(args: argparse.Namespace, profile: StereoProfile
-                  ) -> tuple[Iterator[DepthView], int, float, str, tuple[float, float] | None]:
-    from s2r.depth.pipeline import StereoPipeline
-    from s2r.quality.inputs import DEPTH_SUFFIXES, IMAGE_SUFFIXES, FramePaths, list_files, pair_files
-    from s2r.quality.views import device_fb, device_views, stereo_fb, stereo_views, stereo_visible_m
-
-    if args.right is not None:
-        left = list_files(args.left, IMAGE_SUFFIXES, option="--left")
-        frames = pair_files(left, list_files(args.right, IMAGE_SUFFIXES, option="--right"), kind="right")
-        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
-        return (stereo_views(pipeline, frames), len(frames), stereo_fb(pipeline), f"stereo, preset {args.preset}",
-                stereo_visible_m(pipeline))
-    depth = list_files(args.depth, DEPTH_SUFFIXES, option="--depth")
-    if args.left is None:  # flat wall without images
-        frames = [FramePaths(d, depth=d) for d in depth]
-    else:
-        frames = pair_files(list_files(args.left, IMAGE_SUFFIXES, option="--left"), depth, kind="depth")
-    return device_views(profile, frames, depth_scale_m=args.depth_scale), len(frames), device_fb(profile), \
-        "device depth", None
-
-
-def _bag_views(args: argparse.Namespace, profile: StereoProfile
-               ) -> tuple[Iterator[DepthView], int | None, float, str, tuple[float, float] | None]:
-    from s2r.depth.pipeline import StereoPipeline
-    from s2r.quality.views import bag_device_views, bag_stereo_views, device_fb, stereo_fb, stereo_visible_m
-
-    if args.right_topic is not None:
-        pipeline = StereoPipeline(profile, preset=args.preset, num_disparities=args.num_disparities)
-        views = bag_stereo_views(pipeline, args.bag, args.left_topic, args.right_topic, max_dt_s=args.max_dt)
-        return views, None, stereo_fb(pipeline), f"stereo from bag, preset {args.preset}", stereo_visible_m(pipeline)
-    views = bag_device_views(profile, args.bag, args.left_topic, args.depth_topic, max_dt_s=args.max_dt,
-                             depth_scale_m=args.depth_scale)
-    return views, None, device_fb(profile), "device depth from bag", None
-
-
-def _measure(args: argparse.Namespace, profile: StereoProfile) -> QualityResult:
+def _measure(args: argparse.Namespace, profile: StereoProfile, source: RecordingSource) -> QualityResult:
     from s2r.quality.run import measure_board_views, measure_wall_views
+    from s2r.quality.source import open_source
 
-    source_of = _bag_views if args.bag is not None else _folder_views
-    views, total, fb, source, visible = source_of(args, profile)
+    opened = open_source(profile, source, preset=args.preset, num_disparities=args.num_disparities)
     bar = ProgressBar(enabled=False if (args.quiet or args.json) else None)
+    keep = REPORT_FRAMES if args.report else 0
     if args.wall:
-        return measure_wall_views(profile, views, fb_px_m=fb, source=f"{source}, flat wall",
-                                  roi_fraction=args.roi, distance_m=args.distance, progress=bar, total=total)
-    return measure_board_views(profile, views, pattern=args.pattern, square_m=args.square, fb_px_m=fb,
-                               source=source, total=total, visible_m=visible, progress=bar)
+        return measure_wall_views(profile, opened.views, fb_px_m=opened.fb_px_m,
+                                  source=f"{opened.description}, flat wall", roi_fraction=args.roi,
+                                  distance_m=args.distance, progress=bar, total=opened.total, keep_images=keep)
+    return measure_board_views(profile, opened.views, pattern=args.pattern, square_m=args.square,
+                               fb_px_m=opened.fb_px_m, source=opened.description, total=opened.total,
+                               visible_m=opened.visible_m, progress=bar, keep_images=keep)
 
 
 def _cmd_depth_quality(args: argparse.Namespace) -> int:
     from s2r.quality.report import quality_lines, write_quality_report
 
     _check_args(args)
+    source = _source(args)
     profile = load_profile(args.profile)
     if args.report:
         prepare_output_dir(args.report, force=args.force)
         check_output_free(Path(args.report) / "depth_quality.html", force=args.force)
-    result = _measure(args, profile)
+    result = _measure(args, profile, source)
     if args.json:
-        print_json(result.as_dict())
+        from s2r.quality.report import verdict
+
+        print_json({**result.as_dict(), "verdict": verdict(result).as_dict()})
     else:
         print("\n".join(quality_lines(result)))
     if args.report:

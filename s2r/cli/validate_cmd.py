@@ -48,8 +48,12 @@ def register(sub: Any) -> None:
     parser.add_argument("--preset", default="profile",
                         help="depth pipeline preset for both profiles (profile, seed-sgbm, fast, bm, ros-default)")
     parser.add_argument("--distances", metavar="M,M,...", help="plane distances in metres (default by mode)")
-    parser.add_argument("--recording", metavar="DIR", help="real stereo chessboard pairs (left/ right/ or leftNN/"
-                        "rightNN): measure the real camera on them and the sim on the same boards at the same poses")
+    parser.add_argument("--recording", metavar="SRC", help="the real camera's chessboard recording: a folder (left/ "
+                        "right/, leftNN/rightNN, or left/ depth/ for device depth), or 'left=GLOB,right=GLOB', "
+                        "'left=DIR,depth=DIR', 'bag=BAG,left-topic=T,right-topic=T|depth-topic=T'; measured with "
+                        "Intel's metrics per distance bin beside the sim")
+    parser.add_argument("--sim-recording", metavar="SRC", help="the sim camera's own recording (same forms as "
+                        "--recording, e.g. a Gazebo or MuJoCo run); without it the sim renders the recovered poses")
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
                         help="--recording board's inner corners COLSxROWS (default 9x6)")
     parser.add_argument("--square", type=float, default=0.025, help="--recording board's square size, m (0.025)")
@@ -141,19 +145,21 @@ def _check_roles(sim: Any, real: Any, *, sim_path: str, real_path: str) -> None:
 
 
 def _recording(args: argparse.Namespace, pair: bool) -> Any:
-    """The --recording spec (checked before any work), or None."""
-    from pathlib import Path
-
+    """The --recording / --sim-recording spec (checked before any work), or None."""
+    from s2r.quality.source import parse_source
     from s2r.validate.run import RecordingSpec
 
     if args.recording is None:
+        if args.sim_recording is not None:
+            raise ValidateError("--sim-recording is compared with a real recording", field="--sim-recording",
+                                hint="pass --recording SRC too")
         return None
     if not pair:
         raise ValidateError("--recording compares a sim with a real camera", field="--recording",
                             hint="pass SIM REAL profiles")
-    if not Path(args.recording).is_dir():
-        raise ValidateError("recording folder not found", path=args.recording, field="--recording",
-                            hint="pass a folder with left/ and right/ or leftNN/rightNN images")
+    parse_source(args.recording, option="--recording")
+    if args.sim_recording is not None:
+        parse_source(args.sim_recording, option="--sim-recording")
     if not args.square > 0:
         raise ValidateError(f"must be positive metres, got {args.square}", field="--square", hint="e.g. 0.025")
-    return RecordingSpec(str(args.recording), tuple(args.pattern), float(args.square))
+    return RecordingSpec(str(args.recording), tuple(args.pattern), float(args.square), args.sim_recording)

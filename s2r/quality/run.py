@@ -9,15 +9,20 @@ Sources of depth, each in the pixel grid of the image the board is detected in:
   is detected in the raw left image, its pose solved with the profile's left intrinsics and distortion;
   ``f B`` is the left focal length times the profile's baseline.
 
+A frame is scored on its inliers (:func:`s2r.quality.metrics.frame_quality`) or listed as not scored with the
+reason: no board found, the board partly outside the matcher's depth range (stereo: the board's whole depth span
+must lie inside what the disparity range sees, or SGBM returns mismatches there), too few valid pixels, mismatches
+dominating, a figure that cannot be a measurement. The per-bin summary uses scored frames only.
+
 Temporal noise: frames whose board corners lie within ``REPEAT_PX`` (RMS) of an earlier frame's form one static
-pose; each pose seen at least twice gives Intel's temporal noise on that pose's region.
+pose; each pose scored at least twice gives Intel's temporal noise on that pose's region.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -27,15 +32,17 @@ from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.quality.board import BoardView, find_board, normalised_rays, roi_mask, roi_quad
-from s2r.quality.metrics import MISMATCH_NOTE_PCT, FrameQuality, frame_quality, plane_depth, temporal_noise_pct
+from s2r.quality.metrics import FrameQuality, frame_quality, not_scored, plane_depth, temporal_noise_pct
+from s2r.quality.sanity import MAX_TEMPORAL_NOISE_PCT, sane_value
 from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, summarise_bins
+from s2r.quality.temporal import REPEAT_PX, StaticPoses
 
-__all__ = ["REPEAT_PX", "DepthView", "QualityResult", "measure_board_views", "measure_wall_views"]
+__all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "measure_board_views", "measure_wall_views"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
-#: Board corners within this RMS distance (pixels) of an earlier frame's count as the same static pose.
-REPEAT_PX = 0.5
+#: Largest width (pixels) of the images kept per frame for the report.
+THUMB_WIDTH_PX = 320
 
 
 @dataclass(frozen=True)
@@ -50,6 +57,26 @@ class DepthView:
     D: FloatArray
 
 
+@dataclass(frozen=True)
+class FrameImage:
+    """Report material of one frame, downscaled by ``scale`` (<= 1): its grey image (h, w) uint8 or None, its depth
+    (h, w) float32 metres (NaN no data) and the ROI's corners (4, 2) in those pixels (None without a board)."""
+
+    name: str
+    grey: NDArray[np.uint8] | None
+    depth_m: NDArray[np.float32]
+    roi: FloatArray | None
+    scale: float
+
+
+def frame_image(view: DepthView, roi: NDArray[Any] | None) -> FrameImage:
+    """``view`` downscaled (every k-th pixel) to at most ``THUMB_WIDTH_PX`` wide, with its ROI corners (pixels)."""
+    step = max(1, int(np.ceil(view.depth_m.shape[1] / THUMB_WIDTH_PX)))
+    grey = None if view.grey is None else np.ascontiguousarray(view.grey[::step, ::step])
+    quad = None if roi is None else (np.asarray(roi, np.float64) + 0.5) / step - 0.5
+    return FrameImage(view.name, grey, np.ascontiguousarray(view.depth_m[::step, ::step]), quad, 1.0 / step)
+
+
 @dataclass
 class QualityResult:
     """Every frame's metrics, the per-bin summary, temporal noise per repeated pose and the datasheet figures."""
@@ -62,6 +89,12 @@ class QualityResult:
     temporal: list[dict[str, Any]] = field(default_factory=list)
     datasheet: dict[str, Any] | None = None
     poses: list[FloatArray | None] = field(default_factory=list)
+    images: list[FrameImage] = field(default_factory=list)
+
+    @property
+    def scored(self) -> list[FrameQuality]:
+        """The frames scored on their inliers."""
+        return [f for f in self.frames if f.scored]
 
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON (``frames`` with Intel's metric names, ``bins`` the per-bin summary)."""
@@ -70,29 +103,13 @@ class QualityResult:
                 "temporal": self.temporal, "datasheet": self.datasheet}
 
 
-class _Repeats:
-    """Groups frames by static pose and collects each pose's ROI depths for temporal noise."""
-
-    def __init__(self) -> None:
-        self.groups: list[tuple[NDArray[np.float32], NDArray[np.bool_], list[FloatArray], float]] = []
-
-    def add(self, corners: NDArray[np.float32], mask: NDArray[np.bool_], depth: NDArray[np.float32],
-            distance: float) -> int:
-        for k, (ref, ref_mask, depths, _) in enumerate(self.groups):
-            if ref.shape == corners.shape and np.sqrt(np.mean(np.sum((ref - corners) ** 2, axis=1))) < REPEAT_PX:
-                depths.append(depth[ref_mask].astype(np.float64))
-                return k
-        self.groups.append((corners, mask, [depth[mask].astype(np.float64)], distance))
-        return len(self.groups) - 1
-
-    def noise(self) -> list[dict[str, Any]]:
-        out = []
-        for k, (_, _, depths, distance) in enumerate(self.groups):
-            value = temporal_noise_pct(depths, distance)
-            if value is not None:
-                out.append({"pose_group": k, "frames": len(depths), "distance_m": distance,
-                            "temporal_noise_pct": value})
-        return out
+def _period_px(corners: NDArray[np.float32], pattern: tuple[int, int]) -> float:
+    """A chessboard square's size in pixels: the median distance between neighbouring inner corners."""
+    cols, rows = pattern
+    grid = np.asarray(corners, np.float64).reshape(rows, cols, 2)
+    steps = np.concatenate([np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel(),
+                            np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel()])
+    return float(np.median(steps))
 
 
 def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb: float
@@ -104,7 +121,8 @@ def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb
     mask = roi_mask(board.corners, pattern, (w, h))
     ys, xs = np.nonzero(mask)
     rays = normalised_rays(np.column_stack([xs, ys]).astype(np.float64), view.K, view.D)
-    quality = frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane)
+    quality = frame_quality(view.name, view.depth_m[mask].astype(np.float64), rays, fb_px_m=fb, truth=board.plane,
+                            period_px=_period_px(board.corners, pattern))
     corner_z = plane_depth(board.plane, normalised_rays(roi_quad(board.corners, pattern).astype(np.float64),
                                                         view.K, view.D))
     finite = corner_z[np.isfinite(corner_z)]
@@ -112,27 +130,24 @@ def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb
     return quality, mask, span
 
 
-def _range_note(quality: FrameQuality, span_m: tuple[float, float] | None,
-                visible_m: tuple[float, float] | None) -> FrameQuality:
-    """Warn (log and the frame's note) when any part of the board lies outside the matcher's depth range.
+def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, float] | None) -> str:
+    """Why a board spanning ``span_m`` (nearest, farthest metres) is not inside the matcher's ``visible_m`` (near,
+    far metres), or "".
 
     The whole board's depth span counts, not its median distance: a board tilted towards the camera can sit at
     a median inside the range while its near edge needs more disparities than the matcher searches, and
     there SGBM returns mismatches that read as enormous noise rather than as "too near".
     """
     if visible_m is None or span_m is None:
-        return quality
+        return ""
     near, far = visible_m
     if span_m[0] < near:
-        where = f"its nearest part at {span_m[0]:.3f} m is nearer than the matcher sees ({near:.3f} m)"
-    elif span_m[1] > far:
-        where = f"its farthest part at {span_m[1]:.2f} m is beyond the matcher's {far:.1f} m"
-    else:
-        return quality
-    note = (f"board {where}: its depth there is mismatched, not noisy "
-            "(raise num_disparities / lower matcher.min_depth_m)")
-    log.warning("%s: %s", quality.image, note)
-    return FrameQuality(**{**quality.as_dict(), "note": "; ".join(filter(None, [note, quality.note]))})
+        return (f"board partly nearer than the matcher sees: its nearest part at {span_m[0]:.3f} m, the matcher "
+                f"from {near:.3f} m (raise num_disparities / lower matcher.min_depth_m)")
+    if span_m[1] > far:
+        return (f"board partly beyond the matcher's range: its farthest part at {span_m[1]:.2f} m, the matcher to "
+                f"{far:.1f} m (lower min_disparity / raise matcher.max_depth_m)")
+    return ""
 
 
 def _check_shapes(view: DepthView) -> None:
@@ -142,41 +157,61 @@ def _check_shapes(view: DepthView) -> None:
                          hint="the depth must be registered to the left image's pixel grid (D435: left infrared)")
 
 
+def _log_not_scored(frames: Sequence[FrameQuality]) -> None:
+    """One INFO line per frame not scored, one WARNING line counting them."""
+    skipped = [f for f in frames if not f.scored]
+    for f in skipped:
+        log.info("%s: not scored: %s", f.image, f.not_scored)
+    if skipped:
+        log.warning("%d of %d frames not scored (each with its reason in the table): %s", len(skipped), len(frames),
+                    ", ".join(f.image for f in skipped))
+
+
+def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb: float,
+                 visible_m: tuple[float, float] | None, poses: StaticPoses
+                 ) -> tuple[FrameQuality, BoardView | None]:
+    board = None if view.grey is None else find_board(view.grey, view.K, view.D, pattern, square_m)
+    if board is None:
+        return FrameQuality(view.name, None, None, None, None, None, 0, 0,
+                            not_scored=f"no {pattern[0]}x{pattern[1]} chessboard found"), None
+    quality, mask, span = _score_board(view, board, pattern, fb)
+    problem = range_problem(span, visible_m)
+    if problem:
+        quality = not_scored(quality, problem)
+    group = poses.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m,
+                      scored=quality.scored)
+    return replace(quality, pose_group=group), board
+
+
 def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, pattern: tuple[int, int],
                         square_m: float, fb_px_m: float, source: str, total: int | None = None,
                         bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M,
                         visible_m: tuple[float, float] | None = None,
-                        progress: ProgressCallback | None = None) -> QualityResult:
+                        progress: ProgressCallback | None = None, keep_images: int = 0) -> QualityResult:
     """Score every view on its chessboard (``pattern`` inner corners, ``square_m`` metres): see the module
-    docstring. Views without a detectable board are listed with a note and no metrics, never dropped.
-    ``visible_m`` (near, far metres) is the matcher's depth range: a board outside it gets a warning note."""
+    docstring. Every view is listed, scored or not scored with the reason, never dropped. ``visible_m`` (near,
+    far metres) is the matcher's depth range (stereo); ``keep_images`` keeps that many frames' report images."""
     frames: list[FrameQuality] = []
     poses: list[FloatArray | None] = []
-    repeats = _Repeats()
+    images: list[FrameImage] = []
+    static = StaticPoses()
     for i, view in enumerate(views):
         _check_shapes(view)
-        board = None if view.grey is None else find_board(view.grey, view.K, view.D, pattern, square_m)
-        if board is None:
-            frames.append(FrameQuality(view.name, None, None, None, None, None, 0, 0,
-                                       note=f"no {pattern[0]}x{pattern[1]} chessboard found"))
-            poses.append(None)
-        else:
-            quality, mask, span = _score_board(view, board, pattern, fb_px_m)
-            if quality.outlier_pct is not None and quality.outlier_pct > MISMATCH_NOTE_PCT:
-                log.warning("%s: %s", quality.image, quality.note)  # the mismatch note, before any range note
-            quality = _range_note(quality, span, visible_m)
-            group = repeats.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m)
-            frames.append(FrameQuality(**{**quality.as_dict(), "pose_group": group}))
-            poses.append(board.T_cam_board)
+        quality, board = _board_frame(view, pattern, square_m, fb_px_m, visible_m, static)
+        frames.append(quality)
+        poses.append(None if board is None else board.T_cam_board)
+        if len(images) < keep_images:
+            images.append(frame_image(view, None if board is None else roi_quad(board.corners, pattern)))
         report(progress, i + 1, total or i + 1, "depth quality")
     if not any(f.distance_m is not None for f in frames):
         raise DepthError(f"no {pattern[0]}x{pattern[1]} chessboard found in any of {len(frames)} frames",
                          field="--pattern", hint="check --pattern (INNER corners, e.g. 9x6) and the images")
-    temporal = repeats.noise()
+    _log_not_scored(frames)
+    temporal = static.noise()
     return QualityResult(profile.name, source, fb_px_m, frames,
                          summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,
                                         temporal=[(t["distance_m"], t["temporal_noise_pct"]) for t in temporal]),
-                         temporal, datasheet_figures(profile), poses)
+                         temporal, datasheet_figures(profile), poses, images)
 
 
 def central_roi(shape: tuple[int, int], fraction: float) -> NDArray[np.bool_]:
@@ -190,37 +225,63 @@ def central_roi(shape: tuple[int, int], fraction: float) -> NDArray[np.bool_]:
     return mask
 
 
+def _wall_temporal(frames: Sequence[FrameQuality], stack: Sequence[FloatArray], distance_m: float | None
+                   ) -> list[dict[str, Any]]:
+    scored = [s for f, s in zip(frames, stack, strict=True) if f.scored]
+    if len(scored) < 2 or len({s.shape for s in scored}) != 1:
+        return []
+    dist = distance_m if distance_m is not None else float(np.median([f.distance_m for f in frames if f.scored
+                                                                       and f.distance_m is not None]))
+    noise = temporal_noise_pct(scored)
+    if noise is None or not sane_value(noise, MAX_TEMPORAL_NOISE_PCT):
+        return []
+    return [{"pose_group": 0, "frames": len(scored), "distance_m": dist, "temporal_noise_pct": noise}]
+
+
+def _wall_roi(view: DepthView, roi_fraction: float) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+    mask = central_roi(view.depth_m.shape, roi_fraction)
+    ys, xs = np.nonzero(mask)
+    rays = normalised_rays(np.column_stack([xs, ys]).astype(np.float64), view.K, view.D)
+    h, w = mask.shape
+    mh, mw = round(h * (1 - roi_fraction) / 2), round(w * (1 - roi_fraction) / 2)
+    quad = np.array([[mw, mh], [w - mw - 1, mh], [w - mw - 1, h - mh - 1], [mw, h - mh - 1]], np.float64)
+    return mask, rays, quad
+
+
 def measure_wall_views(profile: StereoProfile, views: Iterable[DepthView], *, fb_px_m: float, source: str,
                        roi_fraction: float = 0.8, distance_m: float | None = None,
                        bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M,
                        progress: ProgressCallback | None = None,
-                       total: int | None = None) -> QualityResult:
+                       total: int | None = None, keep_images: int = 0) -> QualityResult:
     """Flat-wall mode (no board): plane fit, sub-pixel RMS and fill rate on the central ROI of every frame;
     Z accuracy against ``distance_m`` (metres along the optical axis, a fronto-parallel wall) when given.
-    All frames are one static pose, so two or more frames also give the temporal noise."""
+    A region that is not one plane is not scored (:func:`s2r.quality.mismatch.planarity_problem`); when no frame
+    is scored for that reason, the recording is refused. All frames are one static pose, so two or more scored
+    frames also give the temporal noise."""
     frames: list[FrameQuality] = []
     stack: list[FloatArray] = []
-    mask: NDArray[np.bool_] | None = None
-    rays: FloatArray | None = None
+    images: list[FrameImage] = []
+    roi: tuple[NDArray[np.bool_], FloatArray, FloatArray] | None = None
     for i, view in enumerate(views):
         _check_shapes(view)
-        if mask is None or mask.shape != view.depth_m.shape:
-            mask = central_roi(view.depth_m.shape, roi_fraction)
-            ys, xs = np.nonzero(mask)
-            rays = normalised_rays(np.column_stack([xs, ys]).astype(np.float64), view.K, view.D)
-        assert rays is not None
-        values = view.depth_m[mask].astype(np.float64)
-        frames.append(frame_quality(view.name, values, rays, fb_px_m=fb_px_m, distance_m=distance_m))
+        if roi is None or roi[0].shape != view.depth_m.shape:
+            roi = _wall_roi(view, roi_fraction)
+        values = view.depth_m[roi[0]].astype(np.float64)
+        frames.append(frame_quality(view.name, values, roi[1], fb_px_m=fb_px_m, distance_m=distance_m,
+                                    require_plane=True))
         stack.append(values)
+        if len(images) < keep_images:
+            images.append(frame_image(view, roi[2]))
         report(progress, i + 1, total or i + 1, "depth quality")
     if not frames:
         raise DepthError("no frames to score", field="--depth", hint="pass depth images")
-    dist = distance_m if distance_m is not None else float(np.median([f.distance_m for f in frames
-                                                                       if f.distance_m is not None] or [np.nan]))
-    noise = temporal_noise_pct(stack, dist) if len({s.shape for s in stack}) == 1 else None
-    temporal = [] if noise is None else [{"pose_group": 0, "frames": len(stack), "distance_m": dist,
-                                          "temporal_noise_pct": noise}]
+    if not any(f.scored for f in frames) and any("not a plane" in f.not_scored for f in frames):
+        reason = next(f.not_scored for f in frames if "not a plane" in f.not_scored)
+        raise DepthError(f"no frame's region is a plane ({frames[0].image}: {reason})", field="--wall",
+                         hint="aim the camera at a flat wall, or pass a smaller --roi")
+    _log_not_scored(frames)
+    temporal = _wall_temporal(frames, stack, distance_m)
     return QualityResult(profile.name, source, fb_px_m, frames,
-                         summarise_bins(frames, fb_px_m=fb_px_m, bins=bins, temporal=[(dist, noise)] if noise else []),
-                         temporal, datasheet_figures(profile))
-
+                         summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,
+                                        temporal=[(t["distance_m"], t["temporal_noise_pct"]) for t in temporal]),
+                         temporal, datasheet_figures(profile), images=images)

@@ -1,12 +1,13 @@
-"""The ``--recording`` comparison as terminal lines and as an HTML report section (sim and real per bin)."""
+"""The recording comparison as terminal lines and as an HTML report section (sim and real per bin, with
+bootstrap intervals and a verdict per bin)."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
 from s2r.errors import terminal_safe
-from s2r.htmlreport import ReportSection, html_fragment, html_table
-from s2r.quality.report import quality_sections
+from s2r.htmlreport import ReportSection, html_table
+from s2r.quality.report import BIN_HEADERS, FRAME_HEADERS, bin_rows, frame_rows, quality_sections
 from s2r.validate.recording import RecordingComparison
 
 if TYPE_CHECKING:
@@ -14,33 +15,42 @@ if TYPE_CHECKING:
 
 __all__ = ["recording_lines", "recording_section", "recording_sections"]
 
-_HEADERS = ("bin m", "frames real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real", "sim",
-            "sub-pixel RMS px real", "sim", "fill % real", "sim", "verdict")
-
-_EXTRA = ("<h3>{{ title }}</h3>{% for p in notes %}<p class='note'>{{ p }}</p>{% endfor %}"
-          "{% for t in tables %}{{ t }}{% endfor %}")
+_HEADERS = ("bin m", "frames real/sim", "not scored real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real",
+            "sim", "sub-pixel RMS px real", "sim", "fill % real", "sim", "outliers % real", "sim", "verdict")
+_DIGITS = {"z_accuracy_pct": 2, "plane_fit_rms_pct": 2, "subpixel_rms_px": 3, "fill_rate_pct": 1, "outlier_pct": 1}
 
 
-def _f(value: float | None, digits: int = 2) -> str:
-    return "-" if value is None else f"{value:.{digits}f}"
+def _cell(value: float | None, ci: tuple[float, float] | None, digits: int) -> str:
+    if value is None:
+        return "-"
+    text = f"{value:.{digits}f}"
+    return text if ci is None else f"{text} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
 
 
 def _row(row: dict[str, Any]) -> list[str]:
-    failed = [v["metric"].removesuffix("_pct").replace("_", " ") for v in row["verdicts"] if not v["passed"]]
-    return [f"{row['lo_m']:g}-{row['hi_m']:g}", f"{row['real_frames']}/{row['sim_frames']}",
-            _f(row["real_z_accuracy_pct"]), _f(row["sim_z_accuracy_pct"]), _f(row["real_plane_fit_rms_pct"]),
-            _f(row["sim_plane_fit_rms_pct"]), _f(row["real_subpixel_rms_px"], 3), _f(row["sim_subpixel_rms_px"], 3),
-            _f(row["real_fill_rate_pct"], 1), _f(row["sim_fill_rate_pct"], 1),
-            "ok" if row["passed"] else "FAIL: " + ", ".join(failed)]
+    cells = [f"{row['lo_m']:g}-{row['hi_m']:g}", f"{row['real_frames']}/{row['sim_frames']}",
+             f"{row.get('real_not_scored', 0)}/{row.get('sim_not_scored', 0)}"]
+    by_metric = {m["metric"]: m for m in row.get("metrics", [])}
+    for metric, digits in _DIGITS.items():
+        m = by_metric.get(metric, {})
+        cells += [_cell(m.get("real"), m.get("real_ci"), digits), _cell(m.get("sim"), m.get("sim_ci"), digits)]
+    return [*cells, str(row.get("verdict", "ok" if row["passed"] else "FAIL"))]
+
+
+def _sides(comparison: RecordingComparison) -> str:
+    real_n = len(comparison.real.scored)
+    sim_n = len(comparison.sim.scored)
+    sim = (f"sim recording {comparison.sim_source}" if comparison.sim_source
+           else "sim renders of the same boards at the recovered poses")
+    return (f"real recording {comparison.folder} ({real_n}/{len(comparison.real.frames)} frames scored) vs {sim} "
+            f"({sim_n}/{len(comparison.sim.frames)} scored); {comparison.pattern[0]}x{comparison.pattern[1]} board, "
+            f"{comparison.square_m:g} m squares; Intel's metrics on each board's PnP plane, medians over scored "
+            "frames [95 % bootstrap interval over frames]")
 
 
 def recording_lines(comparison: RecordingComparison) -> list[str]:
     """Terminal lines: one side-by-side row per distance bin."""
-    real_n = sum(f.distance_m is not None for f in comparison.real.frames)
-    sim_n = sum(f.distance_m is not None for f in comparison.sim.frames)
-    lines = [f"Recording {terminal_safe(comparison.folder)}: real camera on {real_n}/{len(comparison.real.frames)} "
-             "boards, sim on "
-             f"{sim_n} renders of the same poses (Intel's metrics on each board's PnP plane):"]
+    lines = [f"Recording: {terminal_safe(_sides(comparison))}:"]
     rows = [_row(r) for r in comparison.rows]
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(_HEADERS)]
     lines.append("  " + "  ".join(h.rjust(w) for h, w in zip(_HEADERS, widths, strict=True)))
@@ -48,25 +58,32 @@ def recording_lines(comparison: RecordingComparison) -> list[str]:
     return lines
 
 
+def _row_class(row: dict[str, Any]) -> str:
+    return "warn" if row["passed"] is None else ("pass" if row["passed"] else "fail")
+
+
 def recording_sections(comparison: RecordingComparison) -> list[ReportSection]:
     """HTML: the side-by-side table, then each side's per-bin and per-frame tables."""
     table = html_table(list(_HEADERS), [_row(r) for r in comparison.rows],
-                       row_classes=["pass" if r["passed"] else "fail" for r in comparison.rows])
-    intro = (f"Boards of {comparison.pattern[0]}x{comparison.pattern[1]} inner corners, {comparison.square_m:g} m "
-             f"squares, in {comparison.folder}: the real pairs through the real profile's pipeline; the same boards "
-             "rendered at the recovered poses through the sim profile and the same pipeline and metrics.")
-    return [ReportSection("Recording: sim vs real on the same boards", paragraphs=[intro], tables=[table]),
-            *quality_sections(comparison.real, "Recording, real camera"),
-            *quality_sections(comparison.sim, "Recording, sim renders")]
+                       row_classes=[_row_class(r) for r in comparison.rows], left=(len(_HEADERS) - 1,))
+    real_title = "Recording, real camera"
+    sim_title = "Recording, sim camera" if comparison.sim_source else "Recording, sim renders"
+    return [ReportSection("Recording: sim vs real per distance bin", paragraphs=[_sides(comparison) + "."],
+                          tables=[table]),
+            *quality_sections(comparison.real, real_title), *quality_sections(comparison.sim, sim_title)]
 
 
 def recording_section(result: ValidationResult) -> ReportSection | None:
     """The validation report's one recording section (None without ``--recording``): the side-by-side table,
-    then each side's per-bin and per-frame tables."""
+    then each side's per-bin and per-frame tables (captioned)."""
     if result.recording is None:
         return None
-    parts = recording_sections(result.recording)
-    head = parts[0]
-    for extra in parts[1:]:
-        head.tables.append(html_fragment(_EXTRA, title=extra.title, notes=extra.paragraphs, tables=extra.tables))
+    comparison: RecordingComparison = result.recording
+    head = recording_sections(comparison)[0]
+    for side, quality in (("real", comparison.real), ("sim", comparison.sim)):
+        head.paragraphs.append(f"{side}: {quality.profile}, {quality.source}")
+        head.tables.append(html_table(BIN_HEADERS, bin_rows(quality.bins), caption=f"{side}: per distance bin"))
+        head.tables.append(html_table(FRAME_HEADERS, frame_rows(quality.frames), caption=f"{side}: frames",
+                                      row_classes=["" if f.scored else "warn" for f in quality.frames],
+                                      left=(len(FRAME_HEADERS) - 1,)))
     return head

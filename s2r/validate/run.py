@@ -107,11 +107,13 @@ class ValidationResult:
 
 @dataclass(frozen=True)
 class RecordingSpec:
-    """A real recording to compare on: a folder of stereo chessboard pairs, the board's inner corners and square."""
+    """Recordings to compare on: the real one (``folder``: any ``SRC`` of :mod:`s2r.quality.source`), the sim's own
+    (``sim``, None: rendered at the recovered poses), the board's inner corners and square (metres)."""
 
     folder: str
     pattern: tuple[int, int] = (9, 6)
     square_m: float = 0.025
+    sim: str | None = None
 
 
 def visible_range_m(profile: StereoProfile, preset: str) -> tuple[float, float, int]:
@@ -212,14 +214,25 @@ def _collect_checks(result: ValidationResult) -> list[Check]:
     return checks
 
 
+def _compare_recording(sim: StereoProfile, real: StereoProfile, spec: RecordingSpec, settings: Settings,
+                       tol: Tolerances) -> Any:
+    from s2r.validate.recording import compare_recording, compare_recordings
+
+    if spec.sim is not None:
+        return compare_recordings(sim, real, sim_source=spec.sim, real_source=spec.folder, pattern=spec.pattern,
+                                  square_m=spec.square_m, preset=settings.preset, tol=tol, seed=settings.seed)
+    return compare_recording(sim, real, spec.folder, pattern=spec.pattern, square_m=spec.square_m,
+                             preset=settings.preset, tol=tol, seed=settings.seed)
+
+
 def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerances: Tolerances | None = None,
              settings: Settings = FULL, jobs: int | None = None,
              progress: Callable[[int, int, str], None] | None = None,
              recording: RecordingSpec | None = None) -> ValidationResult:
     """Validate ``sim`` against ``real`` (or ``sim`` alone: its self-check). See the module docstring.
 
-    With ``recording`` (needs ``real``), the real camera is also measured on its own recorded chessboard pairs and
-    the sim on renders of the same boards at the recovered poses (:mod:`s2r.validate.recording`).
+    With ``recording`` (needs ``real``), the real camera is also measured on its own recording and the sim on its
+    own (``recording.sim``) or on renders of the same boards at the recovered poses (:mod:`s2r.validate.recording`).
 
     Raises:
         ValidateError: a profile's matcher cannot see the requested distances.
@@ -242,12 +255,8 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
         for stage, secs in value.seconds.items():
             result.seconds[f"{stage} ({role})"] = secs
     if recording is not None and real is not None:
-        from s2r.validate.recording import compare_recording
-
         began = time.perf_counter()
-        result.recording = compare_recording(sim, real, recording.folder, pattern=recording.pattern,
-                                             square_m=recording.square_m, preset=settings.preset, tol=tol,
-                                             seed=settings.seed)
+        result.recording = _compare_recording(sim, real, recording, settings, tol)
         result.seconds["recording"] = time.perf_counter() - began
     result.checks = _collect_checks(result)
     result.seconds["total"] = time.perf_counter() - start

@@ -41,6 +41,10 @@ class Tolerances:
     absolute relative error (percentage points) and ``fill_gap`` on the difference in fill rate; each
     profile's median absolute relative error must stay under ``depth_theory_factor`` times the theoretical
     RMS (Intel's model) at the bin's far end plus ``depth_floor_pct``, and its fill rate above ``min_fill``.
+
+    Recordings (``--recording`` / ``--sim-recording``): per bin, Z accuracy and plane-fit RMS within
+    ``depth_gap_pct`` points, fill rate within ``fill_gap``, sub-pixel RMS within ``subpixel_gap_rel`` of the real
+    value.
     """
 
     size_px: float = 0.0
@@ -64,6 +68,7 @@ class Tolerances:
     depth_theory_factor: float = 3.0
     depth_floor_pct: float = 0.5
     min_fill: float = 0.5
+    subpixel_gap_rel: float = 0.2
 
     @classmethod
     def valid_keys(cls) -> list[str]:

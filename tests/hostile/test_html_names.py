@@ -40,7 +40,9 @@ def test_a_markup_file_name_is_text_in_the_depth_quality_report(tmp_path: Path,
     assert code == 0, capsys.readouterr().err
     parser = _Tags()
     parser.feed((report / "depth_quality.html").read_text(encoding="utf-8"))
-    assert [tag for tag, _ in parser.tags if tag in ("script", "img", "svg")] == []
+    assert [tag for tag, _ in parser.tags if tag in ("script", "svg")] == []
+    images = [dict(attrs).get("src") or "" for tag, attrs in parser.tags if tag == "img"]
+    assert all(src.startswith("data:image/png;base64,") for src in images)  # s2r's own figures only
     assert [name for _, attrs in parser.tags for name, _ in attrs if name.startswith("on")] == []
     assert f"{NAME}.npy" in parser.text
     assert any(tag == "meta" and ("http-equiv", "Content-Security-Policy") in attrs for tag, attrs in parser.tags)

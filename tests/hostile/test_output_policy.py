@@ -89,11 +89,16 @@ def _no_temporaries(folder: Path) -> None:
 
 
 def test_full_disk_on_a_ros_pair_publishes_neither_file(tmp_path: Path) -> None:
-    # left.yaml is 516 bytes, right.yaml 533: a 520-byte file limit lets the first through and stops the second
+    # a file limit one byte under the largest file of the pair lets the smaller ones through and stops that one
+    whole = tmp_path / "whole"
+    assert run_s2r("profile", "convert", "realsense_d435_848x480", "--to", "ros", "-o", str(whole)).returncode == 0
+    limit = max(p.stat().st_size for p in whole.iterdir()) - 1
     out = tmp_path / "ros"
-    done = run_s2r("profile", "convert", "realsense_d435_848x480", "--to", "ros", "-o", str(out), file_size=520)
+    done = run_s2r("profile", "convert", "realsense_d435_848x480", "--to", "ros", "-o", str(out), file_size=limit)
     assert done.returncode == 2, done.stderr
-    assert done.stderr.count("\n") == 1 and "right.yaml: cannot write: File too large" in done.stderr
+    lines = done.stderr.strip().splitlines()
+    errors = [line for line in lines if line.startswith("error: ")]
+    assert errors == [lines[-1]] and ".yaml: cannot write: File too large" in errors[0]
     assert not out.exists() or list(out.iterdir()) == []
 
 

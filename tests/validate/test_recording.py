@@ -49,5 +49,6 @@ def test_cli_refuses_a_recording_without_real(tmp_path: Path, capsys: pytest.Cap
 
     assert main(["validate", "gazebo_dual_camera", "--recording", str(tmp_path)]) == 2
     assert "SIM REAL" in capsys.readouterr().err
-    assert main(["validate", "gazebo_dual_camera", "gazebo_dual_camera", "--recording", str(tmp_path / "x")]) == 2
+    assert main(["validate", "gazebo_dual_camera", "gazebo_dual_camera", "--roles-as-given", "--recording",
+                 str(tmp_path / "x")]) == 2
     assert "recording folder not found" in capsys.readouterr().err
