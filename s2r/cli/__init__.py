@@ -21,6 +21,7 @@ from s2r.cli import (
     depth_quality_cmd,
     profile_cmd,
     render_cmd,
+    sensor_cmd,
     sources_cmd,
     validate_cmd,
 )
@@ -46,6 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
+    sensor_cmd.register(sub)
     return parser
 
 
