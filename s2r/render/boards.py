@@ -134,9 +134,11 @@ def render_board_set(
         target: a file-described board (ChArUco, Kalibr AprilGrid or checkerboard) instead of ``pattern``.
         cut_share: share of views moved so the image edge cuts the board (default 0.4 with a ChArUco or
             AprilGrid target, whose corners are identified one by one; 0 otherwise).
-        sensor: a sensor model whose blur and grey-level noise both images get (:mod:`s2r.sensor`).
+        sensor: a sensor model whose blur and grey-level noise both images get (:mod:`s2r.sensor`); default
+            the profile's own ``sensor:`` section (none: perfect images).
     """
     _check_board(pattern, square_m, views)
+    sensor = profile.sensor if sensor is None else sensor
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
     layout = None if target is None else target_layout(target)

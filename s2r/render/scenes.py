@@ -116,9 +116,11 @@ def render_scene(
     so its depth grows by ``SPAN_RATIO`` (1.5) across the image width, sampling every sub-pixel phase; "room":
     one frame of a textured box room (back wall 0.5 m beyond the farthest distance) with a textured box at each
     distance. See the module docstring for how the rectified ground truth is computed. ``right_gain`` scales
-    the right image's grey levels; ``sensor`` blurs and adds noise to both images (:mod:`s2r.sensor`).
+    the right image's grey levels; ``sensor`` (default the profile's own ``sensor:`` section) blurs and adds noise
+    to both images (:mod:`s2r.sensor`).
     """
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
+    sensor = profile.sensor if sensor is None else sensor
     near, far = clip_planes(profile)
     distances = check_distances(distances_m, near, far)
     rect = stereo_rectification(profile, alpha=0.0)
@@ -149,9 +151,10 @@ def render_boards_at(
 ) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
     """Render a chessboard (``pattern`` inner corners, ``square_m`` squares, the calibration boards' margin) at each
     pose ``T_left_board`` (4x4, board frame -> LEFT optical frame, metres; origin at the first inner corner, x along
-    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose (``sensor``: its
-    blur and noise on both images)."""
+    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose (``sensor``, default
+    the profile's own ``sensor:`` section: its blur and noise on both images)."""
     check_render_options(supersample=supersample, noise_sigma=noise_sigma)
+    sensor = profile.sensor if sensor is None else sensor
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
     left_setup, right_setup = stereo_setups(profile, supersample=supersample)
     with tempfile.TemporaryDirectory(prefix="s2r-boards-at-") as tmp:
