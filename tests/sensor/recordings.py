@@ -191,3 +191,19 @@ def device_recording(out: Path, truth: Truth, *, poses: list = DEPTH_POSES, seed
                     camera_image(render_image(R, t), blur=0.7, noise=1.0, rng=rng))
         cv2.imwrite(str(out / "depth" / f"{k:02d}.png"), device_depth(R, t, truth, rng))
     return out
+
+
+def perfect_recording(out: Path, *, poses: list = DEPTH_POSES, seed: int = 2) -> Path:
+    """The simulator's side of :func:`device_recording`: the same poses' infrared images and PERFECT depth
+    (``out/depth/NN.npy``, float32 metres: every pixel, no noise)."""
+    rng = np.random.default_rng(seed)
+    (out / "left").mkdir(parents=True)
+    (out / "depth").mkdir()
+    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
+    for k, (dist, tx, ty, shift) in enumerate(poses):
+        R, t = board_pose(dist, tx, ty, shift)
+        cv2.imwrite(str(out / "left" / f"{k:02d}.png"), camera_image(render_image(R, t), blur=0.7, noise=1.0, rng=rng))
+        bx, by, z_board = _board_coords(R, t, u, v, 0.0)
+        z = np.where(_on_board(bx, by) & (z_board > 0), z_board, t[2] + 0.6)
+        np.save(out / "depth" / f"{k:02d}.npy", z.astype(np.float32))
+    return out
