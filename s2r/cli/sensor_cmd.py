@@ -99,19 +99,13 @@ def _raw_images(args: argparse.Namespace) -> list[BoardImage]:
         for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, other, other_flag="--right-topic",
                                                   max_dt_s=args.max_dt):
             images = [decode_image(lm, lt)] + ([decode_image(rm, rt)] if args.right_topic else [])
-            found += [board_image(name, _grey(img), args.pattern) for img in images]
+            found += [board_image(name, img, args.pattern) for img in images]
         return [f for f in found if f is not None]
     specs = [("--left", args.left)] + ([("--right", args.right)] if args.right else [])
     for option, spec in specs:
         found += [board_image(p.name, read_grey(p), args.pattern) for p in list_files(spec, IMAGE_SUFFIXES,
                                                                                          option=option)]
     return [f for f in found if f is not None]
-
-
-def _grey(image: Any) -> Any:
-    import cv2
-
-    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
 
 
 def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> list[DepthFrame]:

@@ -16,6 +16,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import cv2
 import numpy as np
 
 from s2r.calib.detect import detect_board
@@ -49,8 +50,10 @@ class SensorFit:
         return {**self.model.model_dump(mode="json"), "notes": self.notes, "frames_used": self.frames}
 
 
-def board_image(name: str, grey: np.ndarray, pattern: tuple[int, int]) -> BoardImage | None:
-    """A raw grey image with its detected chessboard, or None when no board is found."""
+def board_image(name: str, image: np.ndarray, pattern: tuple[int, int]) -> BoardImage | None:
+    """A raw 8-bit image (grey (H, W) or BGR (H, W, 3)) as grey with its detected chessboard, or None when no
+    board is found."""
+    grey = np.asarray(image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), np.uint8)
     corners, _ = detect_board(grey, pattern)
     return None if corners is None else BoardImage(name, grey, np.asarray(corners, np.float32), pattern)
 
