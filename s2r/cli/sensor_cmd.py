@@ -73,6 +73,9 @@ def _check_fit_args(args: argparse.Namespace) -> None:
         raise DepthError("missing left images", field="--left", hint="pass --left DIR|GLOB (or --bag)")
     if args.bag is not None and not args.left_topic:
         raise DepthError("a bag needs --left-topic", field="--left-topic", hint="e.g. /camera/infra1/image_rect_raw")
+    if args.bag is not None and not (args.right_topic or args.depth_topic):
+        raise DepthError("a bag needs a second topic", field="--right-topic/--depth-topic",
+                         hint="--right-topic (stereo pairs) or --depth-topic (device depth)")
     if args.bag is None and (args.left_topic or args.right_topic or args.depth_topic):
         raise DepthError("topics need --bag", field="--left-topic", hint="pass --bag BAG")
     if (args.right or args.right_topic) and (args.depth or args.depth_topic):
@@ -95,10 +98,9 @@ def _raw_images(args: argparse.Namespace) -> list[BoardImage]:
     if args.bag is not None:
         from s2r.quality.bags import bag_pairs, decode_image
 
-        other = args.right_topic or args.left_topic
-        for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, other, other_flag="--right-topic",
-                                                  max_dt_s=args.max_dt):
-            images = [decode_image(lm, lt)] + ([decode_image(rm, rt)] if args.right_topic else [])
+        for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, args.right_topic,
+                                                  other_flag="--right-topic", max_dt_s=args.max_dt):
+            images = [decode_image(lm, lt), decode_image(rm, rt)]
             found += [board_image(name, img, args.pattern) for img in images]
         return [f for f in found if f is not None]
     specs = [("--left", args.left)] + ([("--right", args.right)] if args.right else [])
@@ -108,7 +110,7 @@ def _raw_images(args: argparse.Namespace) -> list[BoardImage]:
     return [f for f in found if f is not None]
 
 
-def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> list[DepthFrame]:
+def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[list[DepthFrame], int]:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.inputs import IMAGE_SUFFIXES, list_files, pair_files
     from s2r.quality.run import measure_board_views
@@ -124,7 +126,7 @@ def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> list[Dep
                                                   kind="right"))
     result = measure_board_views(profile, views, pattern=args.pattern, square_m=args.square,
                                  fb_px_m=stereo_fb(pipeline), source="stereo", visible_m=stereo_visible_m(pipeline))
-    return stereo_depth_frames(result.frames)
+    return stereo_depth_frames(result.frames), len(result.frames)
 
 
 def _device_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[list[DepthFrame], list[BoardImage]]:
@@ -155,14 +157,15 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     check_output_free(args.out, force=args.force)
     if args.profile_out:
         check_output_free(args.profile_out, force=args.force)
+    measured = 0
     if args.depth or args.depth_topic:
         depth, images = _device_frames(args, profile)
         source = "device depth"
     else:
         images = _raw_images(args)
-        depth = _stereo_frames(args, profile) if (args.right or args.right_topic) else []
-        source = "stereo pairs through the pipeline" if depth else "images"
-    fit = fit_model(images, depth, source=f"s2r sensor fit on {source} ({profile.name})")
+        depth, measured = _stereo_frames(args, profile) if (args.right or args.right_topic) else ([], 0)
+        source = "stereo pairs through the pipeline" if measured else "images"
+    fit = fit_model(images, depth, source=f"s2r sensor fit on {source} ({profile.name})", stereo_frames=measured)
     dump_sensor_model(fit.model, args.out, force=args.force)
     if args.profile_out:
         dump_profile(profile.model_copy(update={"sensor": fit.model}), args.profile_out, force=args.force)

@@ -13,8 +13,8 @@ Per frame, inside the board's region (the quadrilateral of its outer inner corne
   that correlates it (:func:`s2r.sensor.depth.hole_field`);
 - edge dropout, over the whole frame: the depth edges of the (5x5 median of the) depth with holes filled from
   the nearest pixel with depth (:func:`s2r.sensor.depth.depth_edges`); the pixels without depth within
-  :data:`BAND_REACH_PX` of an edge beyond those the frame's fill rate explains, divided by the edges' length
-  (from the area within 6-12 px of them), is the band's width.
+  :data:`BAND_REACH_PX` of an edge beyond the share missing 6-12 px from the edges, divided by the edges' length
+  (from the area of that shell), is the band's width.
 """
 
 from __future__ import annotations
@@ -92,8 +92,11 @@ def _transitions(valid: NDArray[np.bool_], mask: NDArray[np.bool_]) -> float | N
     return float(sum(int(p.sum()) for p in pairs)) / n if n else None
 
 
-def _edge_band(depth: NDArray[np.float32], fill: float) -> tuple[float, float] | None:
-    """(excess missing pixels near depth edges, edge length px) of one frame, or None without depth edges."""
+def _edge_band(depth: NDArray[np.float32]) -> tuple[float, float] | None:
+    """(excess missing pixels near depth edges, edge length px) of one frame, or None without depth edges.
+
+    The missing share expected without a band is that of the shell 6-12 px from the edges (both sides, in the
+    same proportions as the band), the edges' length that shell's area over twice its width."""
     edges = depth_edges(depth, smooth=True)
     if edges.sum() < 10:
         return None
@@ -107,12 +110,14 @@ def _edge_band(depth: NDArray[np.float32], fill: float) -> tuple[float, float] |
         return None
     reach = cv2.distanceTransform((~near_edge).astype(np.uint8), cv2.DIST_L2, 5)
     lo, hi = _LENGTH_SHELL_PX
-    length = float(((reach >= lo) & (reach < hi) & (dist >= lo)).sum()) / (2.0 * (hi - lo))
+    shell = (reach >= lo) & (reach < hi) & (dist >= lo)
+    length = float(shell.sum()) / (2.0 * (hi - lo))
     if length < 5:
         return None
+    missing = ~(np.isfinite(depth) & (depth > 0))
+    base = float(missing[shell].mean())
     band = reach < BAND_REACH_PX
-    missing = float((~(np.isfinite(depth) & (depth > 0)))[band].sum())
-    excess = max(missing - band.sum() * (1.0 - fill), 0.0) / max(fill, 1e-3)
+    excess = max(float(missing[band].sum()) - band.sum() * base, 0.0) / max(1.0 - base, 1e-3)
     return excess, length
 
 
@@ -133,7 +138,7 @@ def depth_frame(name: str, depth: NDArray[np.float32], board: BoardView, *, patt
     sigma = _disparity_sigma(z[valid], xy[valid], fb_px_m) if valid.sum() >= _MIN_PIXELS else None
     valid_img = np.isfinite(depth) & (depth > 0)
     inner = cv2.erode(mask.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
-    band = _edge_band(depth, fill) if fill > 0.05 else None
+    band = _edge_band(depth) if fill > 0.05 else None
     return DepthFrame(name, distance, sigma, 100.0 * fill, _transitions(valid_img, inner),
                       None if band is None else band[0], None if band is None else band[1])
 

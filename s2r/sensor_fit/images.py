@@ -25,13 +25,17 @@ from scipy.optimize import curve_fit
 from scipy.special import ndtr
 from scipy.stats import chi2
 
-__all__ = ["STILL_PX", "BoardImage", "edge_spread_px", "image_blur_px", "image_noise_dn", "still_groups"]
+__all__ = ["PIXEL_FOOTPRINT_VAR", "ROUNDING_VAR", "STILL_PX", "BoardImage", "edge_spread_px", "image_blur_px",
+           "image_noise_dn", "still_groups", "temporal_noise_var"]
 
 FloatArray = NDArray[np.float64]
 #: Board corners within this RMS distance (px) of a group's first frame: the same still pose.
 STILL_PX = 0.3
 #: Variance of rounding to integer grey levels (DN^2).
 ROUNDING_VAR = 1.0 / 12.0
+#: Variance (px^2) an edge's spread gets from the pixel's own 1-px footprint (a box of width 1 projected on any
+#: direction), or from sampling a slanted edge at pixel centres before a blur.
+PIXEL_FOOTPRINT_VAR = 1.0 / 12.0
 _MIN_SQUARE_PIXELS = 20
 _MIN_EDGE_PX = 8.0
 
@@ -182,4 +186,4 @@ def image_blur_px(images: Sequence[BoardImage]) -> tuple[float | None, int]:
     if len(spreads) < 5:
         return None, len(spreads)
     s = float(np.median(spreads))
-    return math.sqrt(max(s * s - ROUNDING_VAR, 0.0)), len(spreads)
+    return math.sqrt(max(s * s - PIXEL_FOOTPRINT_VAR, 0.0)), len(spreads)

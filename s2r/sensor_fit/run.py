@@ -44,10 +44,13 @@ class SensorFit:
     model: SensorModel
     notes: dict[str, str] = field(default_factory=dict)
     frames: list[dict[str, Any]] = field(default_factory=list)
+    sigma_by_distance: list[dict[str, float]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain mapping for JSON: the model's fields at the top level, plus ``notes`` and ``frames``."""
-        return {**self.model.model_dump(mode="json"), "notes": self.notes, "frames_used": self.frames}
+        """Plain mapping for JSON: the model's fields at the top level, the measured sigma_d per distance bin
+        (``subpixel_sigma_by_distance``), ``notes`` and ``frames_used``."""
+        return {**self.model.model_dump(mode="json"), "subpixel_sigma_by_distance": self.sigma_by_distance,
+                "notes": self.notes, "frames_used": self.frames}
 
 
 def board_image(name: str, image: np.ndarray, pattern: tuple[int, int]) -> BoardImage | None:
@@ -88,9 +91,12 @@ def fit_device_depth(views: Iterable[DepthView], *, pattern: tuple[int, int], sq
 
 
 def stereo_depth_frames(frames: Sequence[FrameQuality]) -> list[DepthFrame]:
-    """The pipeline depth's per-frame sub-pixel RMS and fill rate (from :mod:`s2r.quality`) as depth frames."""
+    """The pipeline depth's per-frame sub-pixel RMS and fill rate (from :mod:`s2r.quality`) as depth frames.
+
+    Frames that :mod:`s2r.quality` flags with a note (too few valid pixels, mismatches, a board outside the
+    matcher's range) measure the matcher's failure, not the sensor, and are left out."""
     return [DepthFrame(f.image, f.distance_m, f.subpixel_rms_px, f.fill_rate_pct, None, None, None)
-            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None]
+            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None and not f.note]
 
 
 def _sigma_line(frames: Sequence[DepthFrame], *, linear: bool) -> tuple[float | None, float]:
@@ -115,6 +121,17 @@ def _fill_curve(frames: Sequence[DepthFrame]) -> tuple[FillPoint, ...]:
     return tuple(out)
 
 
+def _sigma_by_bin(frames: Sequence[DepthFrame]) -> list[dict[str, float]]:
+    """Measured sigma_d per distance bin: mean distance and median sigma_d of the bin's frames."""
+    out = []
+    for lo, hi in DEFAULT_BINS_M:
+        inside = [f for f in frames if lo <= f.distance_m < hi and f.sigma_d_px is not None]
+        if inside:
+            out.append({"distance_m": float(np.mean([f.distance_m for f in inside])),
+                        "subpixel_sigma_px": float(np.median([f.sigma_d_px for f in inside]))})
+    return out
+
+
 def _band_px(frames: Sequence[DepthFrame]) -> float | None:
     pairs = [(f.band_missing_px, f.edge_length_px) for f in frames
              if f.band_missing_px is not None and f.edge_length_px is not None]
@@ -122,8 +139,10 @@ def _band_px(frames: Sequence[DepthFrame]) -> float | None:
     return sum(a for a, _ in pairs) / length if length > 0 else None
 
 
-def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, source: str) -> SensorFit:
-    """The sensor model of the measured images and depth frames (module docstring)."""
+def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, source: str, stereo_frames: int = 0
+              ) -> SensorFit:
+    """The sensor model of the measured images and depth frames (module docstring); ``stereo_frames``: how many
+    stereo frames were measured before :func:`stereo_depth_frames` left the flagged ones out (for the notes)."""
     if not images and not depth:
         raise DepthError("no chessboard found in any frame", field="--pattern",
                          hint="check --pattern (INNER corners, e.g. 9x6) and the images")
@@ -132,6 +151,8 @@ def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, sour
     sigma, growth = _sigma_line(depth, linear=device)
     band = _band_px(depth)
     holes = hole_scale_px(list(depth))
+    if not depth and stereo_frames:
+        notes["subpixel_sigma_px"] = f"none of {stereo_frames} stereo frames scored without a note (see depth-quality)"
     if depth:
         near, far = min(f.distance_m for f in depth), max(f.distance_m for f in depth)
         notes["subpixel_sigma_px"] = f"{sum(f.sigma_d_px is not None for f in depth)} frames, {near:.2f}-{far:.2f} m"
@@ -143,4 +164,4 @@ def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, sour
                         frames=max(len(images), len(depth)))
     rows = [{"image": f.name, "distance_m": f.distance_m, "sigma_d_px": f.sigma_d_px, "fill_rate_pct": f.fill_pct}
             for f in depth]
-    return SensorFit(model, notes, rows)
+    return SensorFit(model, notes, rows, _sigma_by_bin(depth))

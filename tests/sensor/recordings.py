@@ -151,7 +151,7 @@ def _rank_uniform(field_: np.ndarray) -> np.ndarray:
 
 def device_depth(R: np.ndarray, t: np.ndarray, truth: Truth, rng: np.random.Generator, *, wall_gap: float = 0.6
                  ) -> np.ndarray:
-    """(H, W) uint16 mm depth of the board in front of a wall ``wall_gap`` m behind its centre (0 = no data)."""
+    """(H, W) float64 metres depth of the board in front of a wall ``wall_gap`` m behind its centre (0 = no data)."""
     v, u = np.mgrid[0:H, 0:W].astype(np.float64)
     bx, by, z_board = _board_coords(R, t, u, v, 0.0)
     wall = t[2] + wall_gap
@@ -170,8 +170,7 @@ def device_depth(R: np.ndarray, t: np.ndarray, truth: Truth, rng: np.random.Gene
     sigma = truth.sigma_d_px + truth.sigma_growth_px_per_m * (z - 1.0)
     d = fb / z + rng.standard_normal(z.shape) * sigma
     keep &= d > 0
-    mm = np.where(keep, np.round(1000.0 * fb / np.where(d > 0, d, 1.0)), 0)
-    return np.clip(mm, 0, 65535).astype(np.uint16)
+    return np.where(keep, fb / np.where(d > 0, d, 1.0), 0.0)
 
 
 DEPTH_POSES = [(0.62, 10, -15, (0.0, 0.0)), (0.8, -12, 20, (0.02, 0.0)), (0.9, 15, 10, (-0.02, 0.02)),
@@ -180,8 +179,10 @@ DEPTH_POSES = [(0.62, 10, -15, (0.0, 0.0)), (0.8, -12, 20, (0.02, 0.0)), (0.9, 1
                (1.35, 12, 12, (0.01, 0.0)), (1.3, -6, -12, (0.0, 0.01)), (0.95, 0, 18, (0.0, 0.0))]
 
 
-def device_recording(out: Path, truth: Truth, *, poses: list = DEPTH_POSES, seed: int = 2) -> Path:
-    """Write ``out/left/NN.png`` (infrared, noise 1 DN, blur 0.7 px) and ``out/depth/NN.png`` (uint16 mm)."""
+def device_recording(out: Path, truth: Truth, *, poses: list = DEPTH_POSES, seed: int = 2, npy: bool = False
+                     ) -> Path:
+    """Write ``out/left/NN.png`` (infrared, noise 1 DN, blur 0.7 px) and ``out/depth/NN.png`` (uint16 mm, 0 no
+    data) or, with ``npy``, ``out/depth/NN.npy`` (float32 metres, 0 no data)."""
     rng = np.random.default_rng(seed)
     (out / "left").mkdir(parents=True)
     (out / "depth").mkdir()
@@ -189,7 +190,12 @@ def device_recording(out: Path, truth: Truth, *, poses: list = DEPTH_POSES, seed
         R, t = board_pose(dist, tx, ty, shift)
         cv2.imwrite(str(out / "left" / f"{k:02d}.png"),
                     camera_image(render_image(R, t), blur=0.7, noise=1.0, rng=rng))
-        cv2.imwrite(str(out / "depth" / f"{k:02d}.png"), device_depth(R, t, truth, rng))
+        depth = device_depth(R, t, truth, rng)
+        if npy:
+            np.save(out / "depth" / f"{k:02d}.npy", depth.astype(np.float32))
+        else:
+            mm = np.clip(np.round(depth * 1000), 0, 65535).astype(np.uint16)
+            cv2.imwrite(str(out / "depth" / f"{k:02d}.png"), mm)
     return out
 
 

@@ -44,6 +44,20 @@ def test_device_depth_fit_gives_back_sigma_d_fill_and_band(device_dir: Path, tmp
     assert (tmp_path / "sensor.yaml").read_text().startswith("# s2r sensor model")
 
 
+def test_independent_holes_wide_band_float_depth(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    truth = Truth(sigma_d_px=0.2, fill=[(0.5, 85.0), (2.0, 85.0)], edge_band_px=8.0, hole_scale_px=0.0)
+    rec = device_recording(tmp_path / "rec", truth, npy=True, seed=7)
+    got = _fit(capsys, tmp_path, "--left", str(rec / "left"), "--depth", str(rec / "depth"))
+    assert got["subpixel_sigma_px"] == pytest.approx(0.2, rel=0.15)
+    assert abs(got["subpixel_growth_px_per_m"]) < 0.03
+    for point in got["fill_rate_by_distance"]:
+        assert abs(point["fill_rate_pct"] - 85.0) <= 2.0, point
+    assert got["edge_dropout_px"] == pytest.approx(8.0, rel=0.25)
+    assert got["hole_scale_px"] < 0.3
+    for row in got["subpixel_sigma_by_distance"]:
+        assert row["subpixel_sigma_px"] == pytest.approx(0.2, rel=0.15)
+
+
 def test_stereo_fit_gives_back_image_noise_and_blur(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rec = stereo_recording(tmp_path / "rec", STEREO_TRUTH)
     got = _fit(capsys, tmp_path, "--left", str(rec / "left"), "--right", str(rec / "right"))
