@@ -8,9 +8,10 @@ Images (8-bit grey levels, "DN"; pixels of the camera's image):
 
 - ``image_noise_dn``: standard deviation of additive Gaussian noise, grey levels of the 8-bit range, with the
   0.29 DN of rounding to integers taken out (the render rounds again).
-- ``blur_sigma_px``: standard deviation of the Gaussian optics blur, pixels, beyond the pixel's own 1-px
-  footprint: an edge's measured spread ``s`` gives ``sqrt(s^2 - 1/12)`` (a render averages its supersamples over
-  the pixel already).
+- ``blur_sigma_px``: the edge-spread sigma, pixels: the standard deviation of the Gaussian whose integral best
+  fits a sharp edge's grey-level profile across it. Rendering applies it as a Gaussian blur on top of the
+  render's own (PyBullet, supersample 2: 0.15 px measured on its board edges, so an applied 0.7 px measures
+  0.73 px).
 
 Device depth (in the left camera's pixel grid; disparity ``d = f B / Z`` with the profile's left ``f`` and
 baseline ``B``):

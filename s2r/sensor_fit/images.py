@@ -8,8 +8,10 @@
   (clipped) are left out. Rounding to integers adds 1/12 DN^2, which is taken out.
 - Blur, from the board's edges: along every edge between two neighbouring inner corners (its middle 60 %), the
   grey level against the signed distance from the edge line is fitted with ``a + b Phi((d - delta) / s)``; the
-  median ``s`` over the edges is the edge spread, and ``sqrt(s^2 - 1/12)`` the optics blur beyond the pixel's
-  own 1-px footprint (see :mod:`s2r.sensor_model`).
+  median ``s`` over the edges is the edge spread (see :mod:`s2r.sensor_model`). It includes whatever the pixel's
+  footprint adds: measured on 6 boards imaged by area-averaging 4x4 samples per pixel then blurred by sigma,
+  ``s`` was sigma +8 % at 0.6 px and +0.5 % at 2 px; imaged by one sample per pixel (aliased), -6 % at 0.8 px
+  and -24 % at 0.5 px (a discrete blur of an aliased edge is narrower than the blur).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from scipy.optimize import curve_fit
 from scipy.special import ndtr
 from scipy.stats import chi2
 
-__all__ = ["PIXEL_FOOTPRINT_VAR", "ROUNDING_VAR", "STILL_PX", "BoardImage", "edge_spread_px", "image_blur_px",
+__all__ = ["ROUNDING_VAR", "STILL_PX", "BoardImage", "edge_spread_px", "image_blur_px",
            "image_noise_dn", "still_groups", "temporal_noise_var"]
 
 FloatArray = NDArray[np.float64]
@@ -33,9 +35,6 @@ FloatArray = NDArray[np.float64]
 STILL_PX = 0.3
 #: Variance of rounding to integer grey levels (DN^2).
 ROUNDING_VAR = 1.0 / 12.0
-#: Variance (px^2) an edge's spread gets from the pixel's own 1-px footprint (a box of width 1 projected on any
-#: direction), or from sampling a slanted edge at pixel centres before a blur.
-PIXEL_FOOTPRINT_VAR = 1.0 / 12.0
 _MIN_SQUARE_PIXELS = 20
 _MIN_EDGE_PX = 8.0
 
@@ -181,9 +180,8 @@ def edge_spread_px(images: Sequence[BoardImage], *, max_edges: int = 400) -> lis
 
 
 def image_blur_px(images: Sequence[BoardImage]) -> tuple[float | None, int]:
-    """Optics blur sigma (px, the 1-px pixel footprint taken out) and the number of edges it rests on."""
+    """Edge-spread sigma (px, the median over the board edges) and the number of edges it rests on."""
     spreads = edge_spread_px(images)
     if len(spreads) < 5:
         return None, len(spreads)
-    s = float(np.median(spreads))
-    return math.sqrt(max(s * s - PIXEL_FOOTPRINT_VAR, 0.0)), len(spreads)
+    return float(np.median(spreads)), len(spreads)
