@@ -1,10 +1,10 @@
 """Image noise and blur of a camera, measured on chessboard images (numpy, scipy, OpenCV).
 
 - Noise, from repeated frames of a still pose (board corners within :data:`STILL_PX` RMS of each other): each
-  board pixel's variance across the frames, the median over the board (scaled by the chi-square median, so it
-  estimates the variance), in grey levels. Without repeats, from the flat squares: inside each square, away from
-  its edges by three blur sigmas plus two pixels, the residual variance about a fitted plane ``a + b x + c y``
-  (lighting gradients), the median over the squares (chi-square scaled). Squares or pixels touching 0 or 255
+  flat board pixel's variance across the frames, averaged over the board, in grey levels. Without repeats, from
+  the flat squares: inside each square, away from its edges by three blur sigmas plus two pixels, the residual
+  variance about a fitted plane ``a + b x + c y`` (lighting gradients), the median over the squares (chi-square
+  scaled). Squares or pixels touching 0 or 255
   (clipped) are left out. Rounding to integers adds 1/12 DN^2, which is taken out.
 - Blur, from the board's edges: along every edge between two neighbouring inner corners (its middle 60 %), the
   grey level against the signed distance from the edge line is fitted with ``a + b Phi((d - delta) / s)``; the
@@ -83,13 +83,19 @@ def _board_mask(img: BoardImage) -> NDArray[np.bool_]:
 
 
 def temporal_noise_var(images: Sequence[BoardImage], group: Sequence[int]) -> float | None:
-    """Noise variance (DN^2, rounding included) of one still group: per-pixel variance over the board."""
+    """Noise variance (DN^2, rounding included) of one still group: each flat board pixel's variance across the
+    frames (unbiased), averaged. Flat: the frames' mean image spans under a fifth of the board's contrast within
+    5x5 px (edges left out: a still pose's sub-pixel jitter would read as noise there); clipped pixels left out."""
     stack = np.stack([images[i].grey.astype(np.float64) for i in group])
-    mask = _board_mask(images[group[0]]) & np.all((stack > 0) & (stack < 255), axis=0)
+    board = _board_mask(images[group[0]])
+    mean = stack.mean(axis=0).astype(np.float32)
+    kernel = np.ones((5, 5), np.uint8)
+    span = cv2.dilate(mean, kernel) - cv2.erode(mean, kernel)
+    lo, hi = np.percentile(mean[board], [5, 95]) if board.any() else (0.0, 0.0)
+    mask = board & np.all((stack > 0) & (stack < 255), axis=0) & (span < 0.2 * (hi - lo))
     if mask.sum() < _MIN_SQUARE_PIXELS:
         return None
-    var = np.var(stack[:, mask], axis=0, ddof=1)
-    return _chi2_scaled_median(var.tolist(), len(group) - 1)
+    return float(np.mean(np.var(stack[:, mask], axis=0, ddof=1)))
 
 
 def _square_vars(img: BoardImage, margin_px: float) -> list[tuple[float, int]]:
