@@ -12,18 +12,18 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 #: calib, depth and render.
 LAYERS: dict[str, int] = {
     "_version": 0, "errors": 0, "progress": 0,
-    "fileio": 1, "geometry": 1, "executor": 1,  # fileio and geometry do not import each other
+    "fileio": 1, "geometry": 1, "executor": 1, "sensor_model": 1,  # none of these four import each other
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,
-    "registry": 5, "htmlreport": 5,
+    "registry": 5, "htmlreport": 5, "sensor": 5,  # sensor: applies a sensor model (render uses it)
     "calib": 6, "depth": 6, "render": 6,
     "compat": 7, "quality": 7, "drift": 7,
-    "validate": 8,
+    "validate": 8, "sensor_fit": 8,  # sensor_fit: fits a sensor model on recordings (uses quality)
     "cli": 9, "__main__": 10, "__init__": 10,
 }
 CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
-             "quality", "drift"}
+             "quality", "drift", "sensor", "sensor_fit"}
 PYBULLET_HOMES = {"render"}
 
 

@@ -27,6 +27,7 @@ from s2r.cli import (
     depth_quality_cmd,
     profile_cmd,
     render_cmd,
+    sensor_cmd,
     sources_cmd,
     validate_cmd,
 )
@@ -96,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     depth_quality_cmd.register(sub)
     calibrate_cmd.register(sub)
     validate_cmd.register(sub)
+    sensor_cmd.register(sub)
     check_cmd.register(sub)
     _accept_global_options_anywhere(parser)
     return parser

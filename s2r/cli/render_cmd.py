@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from s2r.cli._common import (
     ProgressBar,
@@ -18,6 +18,9 @@ from s2r.cli._common import (
 )
 from s2r.errors import RenderError
 from s2r.fileio import atomic_write_text, read_text_file
+
+if TYPE_CHECKING:
+    from s2r.sensor_model import SensorModel
 
 __all__ = ["SCENE_CHOICES", "register"]
 
@@ -37,6 +40,9 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
                         help="right camera gain relative to the left (default 1.0)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    parser.add_argument("--sensor-model", type=Path, default=None, metavar="FILE",
+                        help="blur and grey-level noise of this sensor.yaml (s2r sensor fit) on both images; default "
+                        "the profile's own sensor: section")
     add_force(parser)
     add_json(parser)
 
@@ -72,6 +78,15 @@ def register(sub: Any) -> None:
     p_scene.set_defaults(func=_cmd_scene)
 
 
+def _sensor(args: argparse.Namespace) -> SensorModel | None:
+    """The --sensor-model file's model, or None (the profile's own section then applies)."""
+    if args.sensor_model is None:
+        return None
+    from s2r.sensor.files import load_sensor_model
+
+    return load_sensor_model(args.sensor_model)
+
+
 def _cmd_boards(args: argparse.Namespace) -> int:
     from s2r.render import render_board_set
 
@@ -87,7 +102,7 @@ def _cmd_boards(args: argparse.Namespace) -> int:
     result = render_board_set(
         profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
         supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
-        right_gain=args.right_gain, target=target, cut_share=args.cut_share,
+        right_gain=args.right_gain, target=target, cut_share=args.cut_share, sensor=_sensor(args),
     )
     if args.target is not None:
         atomic_write_text(result.out_dir / "target.yaml", read_text_file(args.target), force=True,
@@ -109,7 +124,7 @@ def _cmd_scene(args: argparse.Namespace) -> int:
     bar = ProgressBar(enabled=None if not args.quiet else False)
     frames = render_scene(
         profile, scene=args.scene, distances_m=args.distances, supersample=args.supersample, seed=args.seed,
-        noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain,
+        noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain, sensor=_sensor(args),
     )
     out = write_scene(frames, args.out, force=args.force)
     if args.json:

@@ -97,8 +97,11 @@ def register(sub: Any, profile_sub: Any) -> None:
                        help="urdf (Gazebo classic, two sensors), sdf (classic multicamera) or gz-sim")
     p_exp.add_argument("-o", "--output", type=Path, required=True, help="XML file to write")
     p_exp.add_argument("--noise", type=float, default=None, metavar="SIGMA",
-                       help="Gaussian image noise stddev of the sensor (intensities 0..1); default the profile's "
-                       "simulation.noise_stddev; none without one (a calibration's RMS is not sensor noise)")
+                       help="Gaussian image noise stddev of the sensor (intensities 0..1); default --sensor-model's "
+                       "or the profile's sensor: image_noise_dn / 255, else simulation.noise_stddev; none without "
+                       "one (a calibration's RMS is not sensor noise)")
+    p_exp.add_argument("--sensor-model", type=Path, default=None, metavar="FILE",
+                       help="sensor.yaml from s2r sensor fit: its image noise becomes the sensor's <noise>")
     p_exp.add_argument("--parent-link", default=None, metavar="LINK",
                        help="urdf: mount the rig on this robot link with a fixed joint (edit its origin)")
     add_force(p_exp)
@@ -162,6 +165,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
     check_output_free(args.output, force=args.force)
     profile = load_profile(args.profile)
+    if args.sensor_model is not None:
+        from s2r.sensor.files import load_sensor_model
+
+        profile = profile.model_copy(update={"sensor": load_sensor_model(args.sensor_model)})
     text, warnings = export_gazebo(profile, fmt=args.fmt, noise=args.noise, parent_link=args.parent_link)
     for warning in warnings:
         logger.warning("%s", warning)

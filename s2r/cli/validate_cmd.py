@@ -60,6 +60,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--roles-as-given", action="store_true",
                         help="compare even when SIM is not a simulated profile or REAL is one (provenance.origin); "
                         "e.g. two sim variants")
+    parser.add_argument("--sensor-model", metavar="FILE",
+                        help="sensor.yaml (s2r sensor fit): the SIM camera's blur and noise on every sim render; "
+                        "default each profile's own sensor: section")
     add_json(parser)
     add_force(parser)
     parser.set_defaults(func=_cmd_validate)
@@ -77,6 +80,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)
     sim = load_profile(args.sim)
+    if args.sensor_model is not None:
+        from s2r.sensor.files import load_sensor_model
+
+        sim = sim.model_copy(update={"sensor": load_sensor_model(args.sensor_model)})
     real = None if args.real is None else load_profile(args.real)
     from s2r.depth.pipeline import check_side_by_side  # OpenCV loads only when a command needs it
 

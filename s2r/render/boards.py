@@ -27,6 +27,7 @@ from s2r.render.rig import StereoJob, check_render_options, render_stereo_images
 from s2r.render.target_boards import TargetLayout, cut_views, target_layout
 from s2r.render.textures import checkerboard_texture, write_png
 from s2r.render.world import Surface, write_mesh
+from s2r.sensor_model import SensorModel
 from s2r.targets import MAX_SQUARE_M, AnyTarget, CheckerboardTarget
 
 #: Share of views cut by the image edge for targets identified corner by corner (ChArUco, AprilGrid).
@@ -113,6 +114,7 @@ def render_board_set(
     square_m: float = 0.025, seed: int = 0, supersample: int = 2, noise_sigma: float = 0.0,
     jobs: int | None = None, force: bool = False, progress: ProgressCallback | None = None,
     right_gain: float = 1.0, target: AnyTarget | None = None, cut_share: float | None = None,
+    sensor: SensorModel | None = None,
 ) -> BoardSet:
     """Render a stereo calibration set of ``views`` chessboard views through ``profile`` into ``out_dir``.
 
@@ -132,8 +134,11 @@ def render_board_set(
         target: a file-described board (ChArUco, Kalibr AprilGrid or checkerboard) instead of ``pattern``.
         cut_share: share of views moved so the image edge cuts the board (default 0.4 with a ChArUco or
             AprilGrid target, whose corners are identified one by one; 0 otherwise).
+        sensor: a sensor model whose blur and grey-level noise both images get (:mod:`s2r.sensor`); default
+            the profile's own ``sensor:`` section (none: perfect images).
     """
     _check_board(pattern, square_m, views)
+    sensor = profile.sensor if sensor is None else sensor
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
     layout = None if target is None else target_layout(target)
@@ -152,11 +157,14 @@ def render_board_set(
     with tempfile.TemporaryDirectory(prefix="s2r-boards-") as tmp:
         mesh, texture = board_surface(Path(tmp), board, layout)
         jobs_list = [
-            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k)
+            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k, sensor)
             for k, T in enumerate(poses)
         ]
         images = run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards")
-    options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain}
+    options: dict[str, Any] = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma,
+                               "right_gain": right_gain}
+    if sensor is not None:
+        options["sensor"] = sensor.model_dump(mode="json", exclude_none=True)
     if layout is not None:
         poses = [T @ layout.T_grid_target for T in poses]  # the truth in the target's own frame
     with OutputBatch(force=True, root=out) as batch:  # the whole set, or nothing

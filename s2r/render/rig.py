@@ -16,6 +16,8 @@ from s2r.profile import StereoProfile
 from s2r.render.poses import clip_planes
 from s2r.render.sensor import CameraSetup, Capture, capture
 from s2r.render.world import Surface, set_world
+from s2r.sensor.images import degrade_image
+from s2r.sensor_model import SensorModel
 
 __all__ = ["StereoJob", "check_render_options", "finish_image", "render_stereo", "render_stereo_images",
            "stereo_setups"]
@@ -55,15 +57,19 @@ class StereoJob:
     right_gain: float
     seed: int
     index: int
+    sensor: SensorModel | None = None
 
 
-def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng: np.random.Generator
-                 ) -> NDArray[np.uint8]:
-    """RGB render to the BGR uint8 image a camera delivers: gain, Gaussian noise (grey levels), rounding."""
+def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng: np.random.Generator,
+                 sensor: SensorModel | None = None) -> NDArray[np.uint8]:
+    """RGB render to the BGR uint8 image a camera delivers: gain, the sensor model's blur and grey-level noise
+    (:func:`s2r.sensor.degrade_image`), Gaussian noise per channel (``noise_sigma`` grey levels), rounding.
+
+    Every renderer's images pass through here, so a sensor model applies to every backend alike."""
     bgr = np.ascontiguousarray(rgb[:, :, ::-1])
-    if gain == 1.0 and noise_sigma == 0.0:
+    if gain == 1.0 and noise_sigma == 0.0 and sensor is None:
         return bgr
-    out = bgr.astype(np.float32) * np.float32(gain)
+    out = degrade_image(bgr.astype(np.float32) * np.float32(gain), sensor, rng)
     if noise_sigma > 0:
         out += rng.normal(0.0, noise_sigma, size=out.shape).astype(np.float32)
     return np.asarray(np.clip(np.round(out), 0, 255), dtype=np.uint8)
@@ -79,5 +85,5 @@ def render_stereo_images(job: StereoJob) -> tuple[NDArray[np.uint8], NDArray[np.
     """The job's left and right BGR uint8 images (noise seeded by ``(seed, index)``)."""
     left, right = render_stereo(job)
     rng = np.random.default_rng([job.seed, job.index])
-    return (finish_image(left.rgb, gain=1.0, noise_sigma=job.noise_sigma, rng=rng),
-            finish_image(right.rgb, gain=job.right_gain, noise_sigma=job.noise_sigma, rng=rng))
+    return (finish_image(left.rgb, gain=1.0, noise_sigma=job.noise_sigma, rng=rng, sensor=job.sensor),
+            finish_image(right.rgb, gain=job.right_gain, noise_sigma=job.noise_sigma, rng=rng, sensor=job.sensor))

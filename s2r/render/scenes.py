@@ -39,6 +39,7 @@ from s2r.render.rig import (
 )
 from s2r.render.sensor import Capture
 from s2r.render.world import Surface
+from s2r.sensor_model import SensorModel
 
 __all__ = ["SceneFrame", "render_boards_at", "render_scene", "write_scene"]
 
@@ -94,8 +95,9 @@ def _render_frame(job: _SceneJob) -> tuple[NDArray[np.uint8], NDArray[np.uint8],
     inv_rect = rectified_inverse_depth(left, job.R1, job.P1, job.size)
     rng = np.random.default_rng([job.stereo.seed, job.stereo.index])
     return (
-        finish_image(left.rgb, gain=1.0, noise_sigma=job.stereo.noise_sigma, rng=rng),
-        finish_image(right.rgb, gain=job.stereo.right_gain, noise_sigma=job.stereo.noise_sigma, rng=rng),
+        finish_image(left.rgb, gain=1.0, noise_sigma=job.stereo.noise_sigma, rng=rng, sensor=job.stereo.sensor),
+        finish_image(right.rgb, gain=job.stereo.right_gain, noise_sigma=job.stereo.noise_sigma, rng=rng,
+                     sensor=job.stereo.sensor),
         left.depth_m(),
         (1.0 / inv_rect).astype(np.float32),
         (np.float32(job.fb) * inv_rect - np.float32(job.doffs)).astype(np.float32),
@@ -105,7 +107,7 @@ def _render_frame(job: _SceneJob) -> tuple[NDArray[np.uint8], NDArray[np.uint8],
 def render_scene(
     profile: StereoProfile, *, scene: str = "planes", distances_m: Sequence[float] = (0.5, 1.0, 2.0, 3.0, 5.0),
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
-    progress: ProgressCallback | None = None, right_gain: float = 1.0,
+    progress: ProgressCallback | None = None, right_gain: float = 1.0, sensor: SensorModel | None = None,
 ) -> list[SceneFrame]:
     """Render ``scene`` ("planes", "slanted", "span" or "room") through ``profile`` with exact ground truth.
 
@@ -114,9 +116,11 @@ def render_scene(
     so its depth grows by ``SPAN_RATIO`` (1.5) across the image width, sampling every sub-pixel phase; "room":
     one frame of a textured box room (back wall 0.5 m beyond the farthest distance) with a textured box at each
     distance. See the module docstring for how the rectified ground truth is computed. ``right_gain`` scales
-    the right image's grey levels.
+    the right image's grey levels; ``sensor`` (default the profile's own ``sensor:`` section) blurs and adds noise
+    to both images (:mod:`s2r.sensor`).
     """
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
+    sensor = profile.sensor if sensor is None else sensor
     near, far = clip_planes(profile)
     distances = check_distances(distances_m, near, far)
     rect = stereo_rectification(profile, alpha=0.0)
@@ -125,7 +129,7 @@ def render_scene(
     with tempfile.TemporaryDirectory(prefix="s2r-scene-") as tmp:
         layouts = scene_layouts(profile, Path(tmp), scene=scene, distances_m=distances, seed=seed)
         jobs_list = [
-            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k),
+            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k, sensor),
                       rect.R1, rect.P1, rect.image_size, rect.fx_px * rect.baseline_m, rect.doffs_px)
             for k, (surfaces, _) in enumerate(layouts)
         ]
@@ -134,7 +138,8 @@ def render_scene(
     for name, (_, desc), (left, right, depth, depth_rect, disp) in zip(numbered_names(len(layouts)), layouts,
                                                                       results, strict=True):
         description = {**desc, "profile": profile.name, "supersample": supersample, "seed": seed,
-                       "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info}
+                       "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info,
+                       **({} if sensor is None else {"sensor": sensor.model_dump(mode="json", exclude_none=True)})}
         frames.append(SceneFrame(name, left, right, depth, disp, depth_rect, description))
     return frames
 
@@ -142,18 +147,20 @@ def render_scene(
 def render_boards_at(
     profile: StereoProfile, poses: Sequence[NDArray[np.float64]], *, pattern: tuple[int, int], square_m: float,
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
-    progress: ProgressCallback | None = None,
+    progress: ProgressCallback | None = None, sensor: SensorModel | None = None,
 ) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
     """Render a chessboard (``pattern`` inner corners, ``square_m`` squares, the calibration boards' margin) at each
     pose ``T_left_board`` (4x4, board frame -> LEFT optical frame, metres; origin at the first inner corner, x along
-    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose."""
+    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose (``sensor``, default
+    the profile's own ``sensor:`` section: its blur and noise on both images)."""
     check_render_options(supersample=supersample, noise_sigma=noise_sigma)
+    sensor = profile.sensor if sensor is None else sensor
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
     left_setup, right_setup = stereo_setups(profile, supersample=supersample)
     with tempfile.TemporaryDirectory(prefix="s2r-boards-at-") as tmp:
         mesh, texture = board_surface(Path(tmp), board)
         jobs_list = [StereoJob(left_setup, right_setup, (Surface(mesh, texture, np.asarray(T, np.float64)),),
-                               noise_sigma, 1.0, seed, k) for k, T in enumerate(poses)]
+                               noise_sigma, 1.0, seed, k, sensor) for k, T in enumerate(poses)]
         return list(run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards"))
 
 

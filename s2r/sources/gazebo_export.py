@@ -18,8 +18,9 @@ controls (no distortion under ogre2, the crop), comes back as warnings that stat
 
 Pasting into a ROS robot: the URDF snippet defines the ``*_optical_frame`` links its plugins publish (joint
 rpy -pi/2 0 -pi/2 from each camera link) and, given ``parent_link``, the joint that mounts the rig on it.
-Image noise is emitted only from a sensor noise figure (``simulation.noise_stddev`` or ``noise``), never
-from a calibration's reprojection error (that is corner localisation, not sensor noise). A RealSense's
+Image noise is emitted only from a sensor noise figure (``noise``, else the fitted sensor model's
+``sensor.image_noise_dn / 255``, else ``simulation.noise_stddev``), never from a calibration's reprojection
+error (that is corner localisation, not sensor noise). A RealSense's
 infrared imagers are mono (``L8``) and publish on realsense2_camera's topics (``camera/infra1/image_rect_raw``).
 """
 
@@ -119,7 +120,9 @@ class _Exporter:
         self.warnings: list[str] = []
         self.offset = CENTRE_OFFSET_PX.get(profile.provenance.convention, 0.0)
         sim = profile.simulation
-        self.noise = noise if noise is not None else sim.noise_stddev if sim is not None else None
+        fitted = profile.sensor.image_noise_dn if profile.sensor is not None else None  # grey levels, 0..255
+        self.noise = (noise if noise is not None else fitted / 255.0 if fitted is not None
+                      else sim.noise_stddev if sim is not None else None)
         self.realsense = is_realsense(profile)
 
     def topic(self, side: str) -> tuple[str, str, str]:
@@ -307,8 +310,8 @@ def export_gazebo(profile: StereoProfile, *, fmt: str = "urdf", noise: float | N
     """Gazebo XML (``urdf`` | ``sdf`` | ``gz-sim``) for ``profile`` and warnings about what it cannot express.
 
     Args:
-        noise: Gaussian image noise stddev (intensities 0..1) of the sensor; default the profile's
-            ``simulation.noise_stddev``; none is emitted without one.
+        noise: Gaussian image noise stddev (intensities 0..1) of the sensor; default the profile's fitted
+            ``sensor.image_noise_dn / 255``, else ``simulation.noise_stddev``; none is emitted without one.
         parent_link: URDF only: the robot link the rig (its left camera link) is mounted on with a fixed joint.
 
     Returns:
