@@ -18,7 +18,7 @@ __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIn
 FloatArray = NDArray[np.float64]
 #: Joint types that move; the path through them is evaluated at joint position zero.
 MOVABLE_JOINTS = frozenset({"revolute", "continuous", "prismatic", "planar", "floating", "ball", "universal",
-                            "revolute2", "screw", "gearbox"})
+                            "revolute2", "screw", "gearbox", "hinge", "slide", "free"})
 #: Link-name endings that mark a link as an optical frame already (z forward, x right, y down).
 OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
 
@@ -111,6 +111,11 @@ class CameraSpec:
     index_in_sensor: int = 0
     cameras_in_sensor: int = 1
     lines: dict[str, int | None] = field(default_factory=dict)
+    #: What the reader noticed about this camera and the user should hear when it is chosen (MJCF: a camera mode
+    #: that moves with the simulation, an image size taken from the offscreen buffer).
+    remarks: tuple[str, ...] = ()
+    #: How the intrinsics were given (MJCF: ``fovy``, ``sensorsize + focalpixel + ...``); empty for Gazebo sensors.
+    intrinsics_form: str = ""
 
     @property
     def link_is_optical(self) -> bool:

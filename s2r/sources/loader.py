@@ -13,6 +13,7 @@ from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
 from s2r.sources.kinematics import KinematicTree
+from s2r.sources.mjcf import parse_mjcf
 from s2r.sources.sdf import parse_sdf
 from s2r.sources.sdf_include import resolve_includes
 from s2r.sources.urdf import parse_urdf
@@ -36,8 +37,11 @@ class StereoPair:
 
 
 def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None = None,
-                     package_paths: Sequence[Path] = ()) -> Description:
-    """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
+                     package_paths: Sequence[Path] = (), keyframe: str | None = None) -> Description:
+    """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` / ``.world`` or MJCF file into a :class:`Description`.
+
+    An MJCF model (``<mujoco>`` root, :mod:`s2r.sources.mjcf`) is read at its initial state, or at the
+    ``<keyframe>`` ``keyframe`` names (index or name).
 
     A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
     ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
@@ -57,9 +61,14 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     elif doc.root.tag in ("sdf", "model", "world"):
         resolve_includes(doc, source.parent, package_paths)
         description = parse_sdf(doc)
+    elif doc.root.tag == "mujoco":
+        description = parse_mjcf(doc, keyframe=keyframe)
     else:
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
-                          hint="expected a URDF <robot> or an <sdf> document")
+                          hint="expected a URDF <robot>, an <sdf> document or a MuJoCo <mujoco> model")
+    if keyframe is not None and doc.root.tag != "mujoco":
+        raise SourceError("--keyframe is for MuJoCo (MJCF) models", path=source, field="--keyframe",
+                          hint="leave it out for URDF / SDF")
     description.source_text, description.expanded_text = text, expanded
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
@@ -172,7 +181,8 @@ def stereo_pair(description: Description, *, left: str | None = None, right: str
     tree = KinematicTree(description)
     _, movable = tree.transform(cam_left.link, cam_right.link)
     for joint in movable:
-        logger.warning("%s: joint %r (%s) between the camera links is taken at position 0", description.path,
-                       joint.name, joint.type)
+        at = "the model's initial state" if description.kind == "mjcf" else "position 0"
+        logger.warning("%s: joint %r (%s) between the camera links is taken at %s", description.path,
+                       joint.name, joint.type, at)
     T = optical_pose_between(tree, cam_left, cam_right)
     return StereoPair(cam_left, cam_right, T, tuple(movable))
