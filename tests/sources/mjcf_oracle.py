@@ -11,12 +11,14 @@ rendering).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering (test_mjcf_render.py); read when mujoco is imported
 mujoco = pytest.importorskip("mujoco", reason="the mujoco extra is not installed (pip install -e '.[mujoco]')")
 
 #: MuJoCo's camera frame (-z forward, +y up) to OpenCV's optical frame (z forward, y down).
