@@ -35,7 +35,7 @@ __all__ = ["DEFAULT_OFFSCREEN", "MODES", "MjcfIntrinsics", "camera_intrinsics", 
 DEFAULT_OFFSCREEN = (640, 480)
 MODES = ("fixed", "track", "trackcom", "targetbody", "targetbodycom")
 _INTRINSIC = ("focal", "focalpixel", "principal", "principalpixel")
-_MAX_SENSOR_M = 10.0  # a sensor or focal length beyond 10 m is a unit mistake (mm written as m)
+_MAX_SENSOR_M = 1.0  # a sensor or focal length beyond 1 m is a unit mistake (millimetres written as metres)
 
 
 @dataclass(frozen=True)

@@ -71,7 +71,8 @@ def _expand(doc: XmlDoc, node: ET.Element, folder: Path, here: Path, seen: set[P
             raise SourceError(f"included file {name!r} holds no element under its root", path=doc.path,
                               field=where(doc, child))
         doc.lines.update(inner.lines)
-        _expand(XmlDoc(inner.root, path, doc.lines), inner.root, folder, path.parent, seen, depth + 1)
+        doc.files.update((id(element), path) for element in inner.root.iter())
+        _expand(doc, inner.root, folder, path.parent, seen, depth + 1)
         node.remove(child)
         for offset, element in enumerate(list(inner.root)):
             node.insert(index + offset, element)

@@ -42,11 +42,15 @@ class Compiler:
 
 
 def where(doc: XmlDoc, element: ET.Element, attribute: str | None = None) -> str:
-    """``<tag name='x'> line N: attribute``: the place a message names."""
+    """``<tag name='x'> line N: attribute`` (``line N of part.xml`` for an element from an included file): the place
+    a message names."""
     name = element.get("name")
     text = f"<{element.tag}" + (f" name={name!r}" if name else "") + ">"
     line = doc.line(element)
     text += f" line {line}" if line else ""
+    origin = doc.files.get(id(element))
+    if origin is not None:
+        text += f" of {origin.name}" if line else f" in {origin.name}"
     return text + (f": {attribute}" if attribute else "")
 
 
