@@ -18,7 +18,7 @@ __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIn
 FloatArray = NDArray[np.float64]
 #: Joint types that move; the path through them is evaluated at joint position zero.
 MOVABLE_JOINTS = frozenset({"revolute", "continuous", "prismatic", "planar", "floating", "ball", "universal",
-                            "revolute2", "screw", "gearbox", "hinge", "slide", "free"})
+                            "revolute2", "screw", "gearbox", "hinge", "slide", "free", "mocap"})
 #: Link-name endings that mark a link as an optical frame already (z forward, x right, y down).
 OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
 
@@ -160,3 +160,6 @@ class Description:
     cameras: list[CameraSpec]
     expanded_text: str = ""
     source_text: str = ""
+    #: Where movable joints are taken, in words (MJCF: "the model's initial state" or "keyframe N"); empty means
+    #: position 0 (URDF / SDF).
+    joint_state: str = ""

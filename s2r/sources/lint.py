@@ -285,8 +285,9 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
     pair = stereo_pair(description, left=left, right=right)
     report = _Report(description)
     for joint in pair.movable_joints:
+        at = f"it is taken at {description.joint_state}" if description.joint_state else "its position 0 is assumed"
         report.add("warning", "movable-joint", f"joint {joint.name!r} ({joint.type}) lies between the camera "
-                   "links; its position 0 is assumed", "make it fixed if the cameras are rigidly mounted",
+                   f"links; {at}", "make it fixed if the cameras are rigidly mounted",
                    joint.line, f'name="{joint.name}"')
     mjcf = description.kind == "mjcf"
     for camera in (pair.left, pair.right) if not mjcf else ():

@@ -181,7 +181,7 @@ def stereo_pair(description: Description, *, left: str | None = None, right: str
     tree = KinematicTree(description)
     _, movable = tree.transform(cam_left.link, cam_right.link)
     for joint in movable:
-        at = "the model's initial state" if description.kind == "mjcf" else "position 0"
+        at = description.joint_state or "position 0"
         logger.warning("%s: joint %r (%s) between the camera links is taken at %s", description.path,
                        joint.name, joint.type, at)
     T = optical_pose_between(tree, cam_left, cam_right)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from s2r.sources.description import CameraSpec, Description, FloatArray, JointSp
 from s2r.sources.mjcf_camera import MODES, camera_intrinsics, offscreen_size
 from s2r.sources.mjcf_defaults import Defaults, read_defaults
 from s2r.sources.mjcf_include import expand_includes
+from s2r.sources.mjcf_keyframe import BodyDofs, JointDof, keyframe_poses
 from s2r.sources.mjcf_pose import Compiler, local_pose, numbers, read_compiler, where
 from s2r.sources.xmlparse import XmlDoc
 
@@ -36,8 +37,7 @@ logger = logging.getLogger(__name__)
 SENSOR_TYPE = "mjcf"
 #: The OpenCV optical frame (z forward, y down) in MuJoCo's camera frame (looks along -z, +y up): pi about x.
 T_MJCAM_OPTICAL: FloatArray = make_transform(np.diag([1.0, -1.0, -1.0]), np.zeros(3))
-_SKIPPED = frozenset({"geom", "site", "light", "inertial", "plugin", "composite", "flexcomp", "joint",
-                      "freejoint"})
+_SKIPPED = frozenset({"geom", "site", "light", "inertial", "plugin", "composite", "flexcomp"})
 
 
 @dataclass
@@ -59,21 +59,21 @@ class _Tree:
     joints: list[JointSpec] = field(default_factory=list)
     world: dict[str, FloatArray] = field(default_factory=dict)
     cameras: list[_Camera] = field(default_factory=list)
+    bodies: list[BodyDofs] = field(default_factory=list)
+    world0: dict[str, FloatArray] = field(default_factory=dict)
+    keyframe: str | None = None
 
 
 def _body_name(doc: XmlDoc, body: ET.Element) -> str:
     return body.get("name") or f"body_line_{doc.line(body)}"
 
 
-def _joint_type(tree: _Tree, body: ET.Element, active: str) -> str:
-    """The type of the body's first joint (``fixed`` when it has none)."""
-    for child in body:
-        if child.tag == "freejoint":
-            return "free"
-        if child.tag == "joint":
-            attrs = tree.defaults.attrs(tree.doc, child, "joint", active)
-            return attrs.get("type", "hinge")
-    return "fixed"
+def _dof(tree: _Tree, body: str, element: ET.Element, T_body_frame: FloatArray, active: str) -> None:
+    """Record a ``<joint>`` / ``<freejoint>`` of ``body`` (for keyframes and the movable-joint warning)."""
+    attrs = {"type": "free"} if element.tag == "freejoint" else tree.defaults.attrs(tree.doc, element, "joint",
+                                                                                     active)
+    dofs = next(b for b in tree.bodies if b.name == body)
+    dofs.joints.append(JointDof(element, attrs, T_body_frame))
 
 
 def _walk(tree: _Tree, node: ET.Element, body: str, T_body_frame: FloatArray, active: str) -> None:
@@ -87,6 +87,8 @@ def _walk(tree: _Tree, node: ET.Element, body: str, T_body_frame: FloatArray, ac
             _walk(tree, child, body, T_body_frame @ local_pose(doc, child, tree.compiler), inner)
         elif child.tag == "body":
             _body(tree, child, body, T_body_frame, active)
+        elif child.tag in ("joint", "freejoint") and body != "world":
+            _dof(tree, body, child, T_body_frame, active)
         elif child.tag == "camera":
             attrs = tree.defaults.attrs(doc, child, "camera", active)
             T = T_body_frame @ local_pose(doc, child, tree.compiler, tree.defaults.camera_pose(doc, child, active))
@@ -105,10 +107,13 @@ def _body(tree: _Tree, element: ET.Element, parent: str, T_parent_frame: FloatAr
     inner = tree.defaults.childclass(doc, element, active)
     T = T_parent_frame @ local_pose(doc, element, tree.compiler)
     tree.links[name] = doc.line(element)
-    tree.joints.append(JointSpec(name=f"<body {name}>", type=_joint_type(tree, element, inner), parent=parent,
-                                 child=name, T_parent_child=T, line=doc.line(element)))
     tree.world[name] = tree.world[parent] @ T
+    dofs = BodyDofs(name, parent, element, T, element.get("mocap") == "true")
+    tree.bodies.append(dofs)
     _walk(tree, element, name, np.eye(4), inner)
+    kind = dofs.joints[0].attrs.get("type", "hinge") if dofs.joints else "mocap" if dofs.mocap else "fixed"
+    tree.joints.append(JointSpec(name=f"<body {name}>", type=kind, parent=parent, child=name, T_parent_child=T,
+                                 line=doc.line(element)))
 
 
 def _target_orientation(tree: _Tree, camera: _Camera) -> FloatArray:
@@ -143,9 +148,24 @@ def _pose_for_mode(tree: _Tree, camera: _Camera) -> tuple[FloatArray, str | None
         raise SourceError("mode targetbodycom aims at a subtree's centre of mass, which s2r does not compute",
                           path=doc.path, field=where(doc, element, "mode"),
                           hint="use mode='targetbody' or 'fixed' for the stereo cameras")
-    T = _target_orientation(tree, camera) if mode == "targetbody" else camera.T_body_cam
-    return T, (f"camera mode {mode!r} moves with the simulation state: read at the model's initial state "
-               "(qpos0; pass --keyframe N for a keyframe's)")
+    if mode == "trackcom" and tree.keyframe is not None:
+        raise SourceError("mode trackcom follows a subtree's centre of mass, which s2r does not compute",
+                          path=doc.path, field=where(doc, element, "mode"),
+                          hint="read it at the initial state (leave out --keyframe), or use mode='track'")
+    T = _target_orientation(tree, camera) if mode == "targetbody" else _tracked(tree, camera)
+    where_read = "the model's initial state (qpos0; pass --keyframe N for a keyframe's)" if tree.keyframe is None \
+        else f"keyframe {tree.keyframe}"
+    return T, f"camera mode {mode!r} moves with the simulation state: read at {where_read}"
+
+
+def _tracked(tree: _Tree, camera: _Camera) -> FloatArray:
+    """A ``track`` camera: its world rotation and its offset from the body's origin stay those of the initial
+    state (MuJoCo's ``cam_mat0`` and ``cam_pos0``), wherever the body has moved."""
+    if tree.keyframe is None:
+        return camera.T_body_cam
+    T0 = tree.world0[camera.body] @ camera.T_body_cam
+    position = tree.world[camera.body][:3, 3] + T0[:3, 3] - tree.world0[camera.body][:3, 3]
+    return invert_transform(tree.world[camera.body]) @ make_transform(T0[:3, :3], position)
 
 
 def _spec(tree: _Tree, camera: _Camera, offscreen: tuple[int, int],
@@ -189,8 +209,8 @@ def _clip(doc: XmlDoc) -> tuple[float | None, float | None]:
 def parse_mjcf(doc: XmlDoc, *, keyframe: str | None = None) -> Description:
     """Bodies (as pseudo-joints from their parent body), joints and cameras of an MJCF document (``<mujoco>``).
 
-    ``keyframe``: the index of a ``<keyframe><key>`` whose joint positions place the bodies (default: the
-    model as written, MuJoCo's qpos0). Raises SourceError naming the file and element for anything MuJoCo would
+    ``keyframe``: the index or name of a ``<keyframe><key>`` whose joint positions place the bodies (default:
+    the model as written, MuJoCo's qpos0). Raises SourceError naming the file and element for anything MuJoCo would
     refuse or s2r cannot read."""
     if doc.root.tag != "mujoco":
         raise SourceError(f"expected a <mujoco> root element, got <{doc.root.tag}>", path=doc.path,
@@ -200,10 +220,21 @@ def parse_mjcf(doc: XmlDoc, *, keyframe: str | None = None) -> Description:
     tree.links["world"], tree.world["world"] = doc.line(doc.root), np.eye(4)
     for worldbody in doc.root.findall("worldbody"):
         _walk(tree, worldbody, "world", np.eye(4), tree.defaults.childclass(doc, worldbody, "main"))
+    tree.world0 = dict(tree.world)
     if keyframe is not None:
-        raise SourceError("--keyframe is not read yet: cameras are read at the model's initial state",
-                          path=doc.path, field="<keyframe>", hint="leave out --keyframe")
+        _apply_keyframe(tree, keyframe)
     offscreen = offscreen_size(doc)
     clip = _clip(doc)
     specs = [_spec(tree, camera, offscreen, clip) for camera in tree.cameras]
-    return Description(path=doc.path, kind="mjcf", links=tree.links, joints=tree.joints, cameras=specs)
+    state = "the model's initial state" if keyframe is None else f"keyframe {keyframe}"
+    return Description(path=doc.path, kind="mjcf", links=tree.links, joints=tree.joints, cameras=specs,
+                       joint_state=state)
+
+
+def _apply_keyframe(tree: _Tree, keyframe: str) -> None:
+    """Move every body to its pose at ``keyframe`` (parents come before children in ``tree.bodies``)."""
+    poses = keyframe_poses(tree.doc, tree.bodies, keyframe, tree.compiler)
+    tree.joints = [replace(j, T_parent_child=poses[j.child]) for j in tree.joints]
+    for body in tree.bodies:
+        tree.world[body.name] = tree.world[body.parent] @ poses[body.name]
+    tree.keyframe = keyframe

@@ -24,6 +24,7 @@ from s2r.sources.description import FloatArray
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["MAX_POSE_VALUE", "ORIENTATIONS", "Compiler", "local_pose", "numbers", "quat_from_rotation", "read_compiler",
+           "rotation_from_quat",
            "where"]
 
 #: Largest coordinate accepted in a position or angle (metres, degrees or radians): as for URDF / SDF poses.
@@ -198,3 +199,9 @@ def quat_from_rotation(R: FloatArray) -> tuple[float, float, float, float]:
     v = np.array(q) / np.linalg.norm(q)
     v = -v if v[0] < 0 else v
     return float(v[0]), float(v[1]), float(v[2]), float(v[3])
+
+
+def rotation_from_quat(q: FloatArray) -> FloatArray:
+    """Rotation matrix of a quaternion (w, x, y, z), normalised; identity for a zero one (as MuJoCo normalises)."""
+    norm = float(np.linalg.norm(q))
+    return np.eye(3) if norm < _EPS else _qmat(np.asarray(q, dtype=np.float64) / norm)

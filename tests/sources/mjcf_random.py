@@ -58,7 +58,8 @@ def _camera(rng: random.Random, name: str, degree: bool, classed: bool) -> str:
 
 
 def random_scene(seed: int) -> str:
-    """One MJCF model with cameras ``cam_a`` and ``cam_b`` somewhere in a random body chain."""
+    """One MJCF model with cameras ``cam_a`` and ``cam_b`` somewhere in a random body chain (hinge, slide and ball
+    joints with random anchors and references; a keyframe ``pose`` with random joint positions when it has joints)."""
     rng = random.Random(seed)
     degree = rng.random() < 0.5
     seq = "".join(rng.choice("xyzXYZ") for _ in range(3))
@@ -68,7 +69,7 @@ def random_scene(seed: int) -> str:
     head = (f'<mujoco><compiler angle="{"degree" if degree else "radian"}" eulerseq="{seq}"/>'
             f'<default><default class="k"><camera {_orientation(rng, degree)} pos="{_vec(rng, 3, 0.1)}"/>'
             f'</default></default><worldbody>')
-    body, tail = "", ""
+    body, tail, qpos = "", "", []
     for level in range(depth + 1):
         body += "".join(c for c, h in zip(cams, homes, strict=True) if h == level)
         if level == depth:
@@ -77,8 +78,15 @@ def random_scene(seed: int) -> str:
         if frame:
             body += f'<frame pos="{_vec(rng, 3, 0.3)}" {_orientation(rng, degree)}>'
         body += f'<body name="b{level}" pos="{_vec(rng, 3, 0.5)}" {_orientation(rng, degree)}>'
-        if rng.random() < 0.5:
-            body += f'<joint type="{rng.choice(["hinge", "slide", "ball"])}" axis="{_vec(rng, 3, 1.0)}"/>'
-            body += '<geom size="0.05"/>'
+        kinds: list[str] = []
+        for _ in range(rng.choice([0, 0, 1, 2])):
+            # MuJoCo refuses a turning joint after a ball joint in one body
+            kind = rng.choice(["slide"] if "ball" in kinds else ["hinge", "slide", "ball"])
+            kinds.append(kind)
+            ref = f' ref="{_n(rng.uniform(-30, 30))}"' if kind != "ball" else ""
+            body += f'<joint type="{kind}" axis="{_vec(rng, 3, 1.0)}" pos="{_vec(rng, 3, 0.2)}"{ref}/>'
+            qpos += [_vec(rng, 4, 1.0)] if kind == "ball" else [_n(rng.uniform(-2, 2))]
+        body += '<geom size="0.05"/>'
         tail = "</body>" + ("</frame>" if frame else "") + tail
-    return head + body + tail + "</worldbody></mujoco>"
+    key = f'<keyframe><key name="pose" qpos="{" ".join(qpos)}"/></keyframe>' if qpos else ""
+    return head + body + tail + "</worldbody>" + key + "</mujoco>"
