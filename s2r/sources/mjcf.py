@@ -64,6 +64,11 @@ class _Tree:
     keyframe: str | None = None
 
 
+def _line(doc: XmlDoc, element: ET.Element) -> int | None:
+    """The element's line in the scene file (None for one read from an included file: lint names the scene)."""
+    return None if id(element) in doc.files else doc.line(element)
+
+
 def _body_name(doc: XmlDoc, body: ET.Element) -> str:
     return body.get("name") or f"body_line_{doc.line(body)}"
 
@@ -93,9 +98,13 @@ def _walk(tree: _Tree, node: ET.Element, body: str, T_body_frame: FloatArray, ac
             attrs = tree.defaults.attrs(doc, child, "camera", active)
             T = T_body_frame @ local_pose(doc, child, tree.compiler, tree.defaults.camera_pose(doc, child, active))
             tree.cameras.append(_Camera(child, attrs, body, T_body_frame, T, len(tree.cameras)))
-        elif child.tag in ("replicate", "attach") and (child.tag == "attach" or child.find(".//camera") is not None):
-            raise SourceError(f"<{child.tag}> is not read by s2r", path=doc.path, field=where(doc, child),
-                              hint="write the cameras' bodies out (MuJoCo's saved XML has no replicate/attach)")
+        elif child.tag == "replicate" and child.find(".//camera") is not None:
+            raise SourceError("cameras inside <replicate> are not read by s2r", path=doc.path,
+                              field=where(doc, child), hint="write the cameras' bodies out (MuJoCo's saved XML, "
+                              "mj_saveLastXML, has no replicate)")
+        elif child.tag == "attach":
+            logger.warning("%s: %s: the cameras of an attached model are not read (s2r reads this file only)",
+                           doc.path, where(doc, child))
 
 
 def _body(tree: _Tree, element: ET.Element, parent: str, T_parent_frame: FloatArray, active: str) -> None:
@@ -106,14 +115,14 @@ def _body(tree: _Tree, element: ET.Element, parent: str, T_parent_frame: FloatAr
                           hint="give each body a unique name")
     inner = tree.defaults.childclass(doc, element, active)
     T = T_parent_frame @ local_pose(doc, element, tree.compiler)
-    tree.links[name] = doc.line(element)
+    tree.links[name] = _line(doc, element)
     tree.world[name] = tree.world[parent] @ T
     dofs = BodyDofs(name, parent, element, T, element.get("mocap") == "true")
     tree.bodies.append(dofs)
     _walk(tree, element, name, np.eye(4), inner)
     kind = dofs.joints[0].attrs.get("type", "hinge") if dofs.joints else "mocap" if dofs.mocap else "fixed"
     tree.joints.append(JointSpec(name=f"<body {name}>", type=kind, parent=parent, child=name, T_parent_child=T,
-                                 line=doc.line(element)))
+                                 line=_line(doc, element)))
 
 
 def _target_orientation(tree: _Tree, camera: _Camera) -> FloatArray:
@@ -178,7 +187,7 @@ def _spec(tree: _Tree, camera: _Camera, offscreen: tuple[int, int],
         notes.append(f"camera has no resolution: it renders at the offscreen buffer size {k.width}x{k.height} "
                      "(<visual><global offwidth offheight>)")
     name = element.get("name") or f"camera{camera.index}"
-    line = doc.line(element)
+    line = _line(doc, element)
     return CameraSpec(
         name=name, sensor_name=name, camera_name=name, sensor_type=SENSOR_TYPE, link=camera.body,
         T_link_camera=T_body_cam @ T_MJCAM_OPTICAL @ invert_transform(T_LINK_OPTICAL), width=k.width,

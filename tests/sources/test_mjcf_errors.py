@@ -63,7 +63,7 @@ CASES = {
     "compiler_angle": (_scene(head='<compiler angle="grad"/>'), ("<compiler> line 1: angle",)),
     "eulerseq": (_scene(head='<compiler eulerseq="xyw"/>'), ("eulerseq",)),
     "replicate_camera": (_scene(body='<replicate count="2" offset="0 0.1 0"><camera name="r"/></replicate>'),
-                         ("<replicate", "not read")),
+                         ("<replicate", "cameras inside <replicate> are not read")),
     "duplicate_class": ('<mujoco><default><default class="a"/><default class="a"/></default></mujoco>',
                         ("defined twice",)),
     "no_cameras": ("<mujoco><worldbody/></mujoco>", ("no camera",)),

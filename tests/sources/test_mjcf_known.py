@@ -4,6 +4,7 @@ default-class and include rules, and what a camera without a resolution says."""
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 
@@ -126,3 +127,26 @@ def test_offscreen_size_and_its_remark(tmp_path: Path) -> None:
     assert camera.remarks and "offscreen buffer size 640x720" in camera.remarks[0]
     assert camera.lens is not None
     assert math.isclose(camera.lens.fy, 360 / math.tan(math.radians(25)), rel_tol=1e-12)
+
+
+def test_attach_is_named_and_the_rest_read(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    text = _pair_scene('resolution="640 480"').replace(
+        "</body>", '<attach model="gripper" body="hand" prefix="g_"/></body>')
+    with caplog.at_level("WARNING", logger="s2r"):
+        logger = logging.getLogger("s2r")
+        saved = logger.propagate
+        logger.propagate = True
+        try:
+            description = load_description(_write(tmp_path, text))
+        finally:
+            logger.propagate = saved
+    assert [c.name for c in description.cameras] == ["left", "right"]
+    assert "<attach> line 1: the cameras of an attached model are not read" in caplog.text
+
+
+def test_included_camera_has_no_scene_line(tmp_path: Path) -> None:
+    _write(tmp_path, '<mujoco><camera name="right" pos="0.1 0 0" resolution="64 48"/>\n</mujoco>', "eyes.xml")
+    scene = _write(tmp_path, '<mujoco><worldbody><camera name="left" resolution="64 48"/>\n\n\n'
+                   '<include file="eyes.xml"/></worldbody></mujoco>')
+    left, right = load_description(scene).cameras
+    assert left.lines["camera"] == 1 and right.lines["camera"] is None
