@@ -211,8 +211,9 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
     source = description.path
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
     how = (f"intrinsics as MuJoCo renders them (left {pair.left.intrinsics_form}, right {pair.right.intrinsics_form}),"
-           " exact pixel-centre convention" if description.kind == "mjcf"
-           else f"intrinsics from horizontal_fov in the {convention} convention")
+           " exact pixel-centre convention" + ("" if pair.left.clip_near_m is not None else "; clip planes not read "
+                                                "(MuJoCo scales <map znear zfar> by the model's extent)")
+           if description.kind == "mjcf" else f"intrinsics from horizontal_fov in the {convention} convention")
     notes = (f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); {how}"
              + (f"; xacro args {args}" if args else "")
              + "".join(f"; {c.name}: {r}" for c in (pair.left, pair.right) for r in c.remarks))

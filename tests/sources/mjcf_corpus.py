@@ -107,6 +107,11 @@ SCENES = [
               "parts/eyes.xml": '''<mujoco><camera name="left" class="cam" pos="0 0.06 0" xyaxes="0 -1 0 0 0 1"/>
                  <camera name="right" class="cam" pos="0 -0.06 0" xyaxes="0 -1 0 0 0 1"/></mujoco>''',
           }),
+    Scene("frames_in_frames_worldbody", '''<mujoco><compiler angle="radian"/><worldbody>
+      <frame pos="0.5 0 1" euler="0 0 0.2"><frame pos="0 0.1 0" axisangle="0 1 0 0.1"><frame quat="1 0 0 0.05">
+        <camera name="left" pos="0 0.04 0" xyaxes="0 -1 0 0 0 1" fovy="55" resolution="960 540"/></frame>
+        <camera name="right" pos="0 -0.04 0" quat="0.49875 0.5 -0.5 -0.50125" fovy="55" resolution="960 540"/>
+      </frame></frame></worldbody></mujoco>'''),
     Scene("cameras_on_separate_bodies", '''<mujoco><worldbody>
       <body name="bar" pos="0 0 1" axisangle="0 0 1 15">
         <body name="lmount" pos="0 0.06 0" quat="1 0 0 0.01"><camera name="left" quat="0.5 0.5 -0.5 -0.5" fovy="60"

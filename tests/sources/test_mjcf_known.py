@@ -150,3 +150,13 @@ def test_included_camera_has_no_scene_line(tmp_path: Path) -> None:
                    '<include file="eyes.xml"/></worldbody></mujoco>')
     left, right = load_description(scene).cameras
     assert left.lines["camera"] == 1 and right.lines["camera"] is None
+
+
+def test_clip_planes_from_a_written_extent(tmp_path: Path) -> None:
+    """MuJoCo's clip planes are <map znear zfar> (defaults 0.01 and 50) times the model's extent."""
+    text = _pair_scene('resolution="640 480"').replace(
+        "<worldbody>", '<statistic extent="2"/><visual><map znear="0.05"/></visual><worldbody>')
+    profile = load_description_profile(_write(tmp_path, text))
+    assert (profile.simulation.clip_near_m, profile.simulation.clip_far_m) == pytest.approx((0.1, 100.0))
+    unknown = load_description_profile(_write(tmp_path, _pair_scene('resolution="640 480"')))
+    assert "clip planes not read" in unknown.provenance.notes
