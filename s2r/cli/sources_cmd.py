@@ -48,7 +48,8 @@ def parse_env_values(items: list[str]) -> dict[str, str]:
 
 
 def _add_description_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("file", type=Path, help="robot description: .urdf, .xacro / .urdf.xacro, .sdf or .world")
+    p.add_argument("file", type=Path, help="robot description: .urdf, .xacro / .urdf.xacro, .sdf, .world or a "
+                   "MuJoCo MJCF model (<mujoco> root)")
     p.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments, right after FILE")
     p.add_argument("--arg", dest="xacro_more", action="append", default=[], metavar="NAME:=VALUE",
                    help="a xacro argument anywhere on the line (repeatable)")
@@ -59,10 +60,12 @@ def _add_description_options(p: argparse.ArgumentParser) -> None:
                    help="folder searched for $(find pkg) (repeatable; then ROS_PACKAGE_PATH)")
     p.add_argument("--left", default=None, help="left camera (sensor, sensor/camera, camera or link name)")
     p.add_argument("--right", default=None, help="right camera")
+    p.add_argument("--keyframe", default=None, metavar="N",
+                   help="MJCF: read the bodies at this <keyframe> (index or name) instead of the initial state")
 
 
 def register(sub: Any, profile_sub: Any) -> None:
-    """Add ``s2r lint`` and ``s2r profile from-urdf`` / ``export-gazebo``."""
+    """Add ``s2r lint`` and ``s2r profile from-description`` (alias ``from-urdf``) / ``export-gazebo``."""
     p_lint: argparse.ArgumentParser = sub.add_parser(
         "lint", help="check a robot description's stereo cameras for common mistakes",
         description="Findings with severity, file:line and the fix. Exit 1 on any error-level finding.")
@@ -72,23 +75,8 @@ def register(sub: Any, profile_sub: Any) -> None:
     add_json(p_lint)
     p_lint.set_defaults(func=_cmd_lint)
 
-    p_from: argparse.ArgumentParser = profile_sub.add_parser(
-        "from-urdf", help="a sim profile from a URDF / xacro / SDF description",
-        description="Two camera sensors (or one multicamera) to a sim stereo profile in a stated convention.")
-    _add_description_options(p_from)
-    p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
-    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default=None,
-                        help="pixel convention of the intrinsics (default: inferred from the simulator the file "
-                        "loads: gz-sim systems -> gz-sim, gazebo_ros plugins -> gazebo-classic; else gazebo-classic)")
-    p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
-    p_from.add_argument("--allow-bad-baseline", action="store_true",
-                        help="write a pair lint calls an error (baseline along the optical axis, right camera on "
-                        "the left) with a warning instead of refusing it")
-    p_from.add_argument("--optical-links", action="store_true", help=argparse.SUPPRESS)
-    add_force(p_from)
-    add_json(p_from)
-    p_from.set_defaults(func=_cmd_from_urdf)
-
+    for command in ("from-description", "from-urdf"):
+        _add_from_description(profile_sub, command)
     p_exp: argparse.ArgumentParser = profile_sub.add_parser(
         "export-gazebo", help="Gazebo sensor XML that makes a simulated camera match a profile",
         description="Sensor blocks and the baseline joint/poses; warnings say what the format cannot express.")
@@ -114,6 +102,29 @@ def register(sub: Any, profile_sub: Any) -> None:
     p_regen.set_defaults(func=_cmd_regenerate)
 
 
+def _add_from_description(profile_sub: Any, command: str) -> None:
+    """``s2r profile from-description`` (and its older name ``from-urdf``, the same command)."""
+    p_from: argparse.ArgumentParser = profile_sub.add_parser(
+        command, help="a sim profile from a robot description (URDF / xacro / SDF / MuJoCo MJCF)"
+        if command == "from-description" else "the same as from-description (its older name)",
+        description="Two camera sensors (or one multicamera, or two MJCF cameras) to a sim stereo profile in a "
+        "stated convention.")
+    _add_description_options(p_from)
+    p_from.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
+    p_from.add_argument("--convention", choices=CONVENTION_CHOICES, default=None,
+                        help="pixel convention of the intrinsics (default: inferred from the simulator the file "
+                        "loads: gz-sim systems -> gz-sim, gazebo_ros plugins -> gazebo-classic; else gazebo-classic; "
+                        "MJCF: exact, the only one)")
+    p_from.add_argument("--name", default=None, help="profile name (default: the description file's name)")
+    p_from.add_argument("--allow-bad-baseline", action="store_true",
+                        help="write a pair lint calls an error (baseline along the optical axis, right camera on "
+                        "the left) with a warning instead of refusing it")
+    p_from.add_argument("--optical-links", action="store_true", help=argparse.SUPPRESS)
+    add_force(p_from)
+    add_json(p_from)
+    p_from.set_defaults(func=_cmd_from_urdf)
+
+
 def _cmd_lint(args: argparse.Namespace) -> int:
     from s2r.sources.lint import lint_description
 
@@ -124,7 +135,8 @@ def _cmd_lint(args: argparse.Namespace) -> int:
         info = read_camera_info(args.camera_info)
     xacro_args = parse_xacro_args(args.xacro_args + args.xacro_more)
     findings = lint_description(args.file, camera_info=info, xacro_args=xacro_args, package_paths=args.package_path,
-                                left=args.left, right=args.right, env=parse_env_values(args.env_values))
+                                left=args.left, right=args.right, env=parse_env_values(args.env_values),
+                                keyframe=args.keyframe)
     errors = sum(f.severity == "error" for f in findings)
     if args.json:
         print_json({"file": str(args.file), "errors": errors, "findings": [f.as_dict() for f in findings]})
@@ -147,7 +159,7 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
     profile = load_description_profile(
         args.file, convention=args.convention, left=args.left, right=args.right,
         xacro_args=parse_xacro_args(args.xacro_args + args.xacro_more), package_paths=args.package_path, name=args.name,
-        allow_bad_baseline=args.allow_bad_baseline, env=parse_env_values(args.env_values))
+        allow_bad_baseline=args.allow_bad_baseline, env=parse_env_values(args.env_values), keyframe=args.keyframe)
     dump_profile(profile, args.output, force=args.force)
     if args.json:
         print_json({"output": str(args.output), "profile": profile})

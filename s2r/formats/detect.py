@@ -73,8 +73,10 @@ def detect_format(path: str | Path) -> Format:
             return "kalibr"
         return "ros" if _is_filestorage_camera_info(text, source) else "opencv"
     if _is_robot_description(source, text):
-        raise FormatError("is a robot description (URDF / xacro / SDF), not a camera profile", path=source,
-                          hint=f"derive a profile first: s2r profile from-urdf {source} -o profile.yaml")
+        mjcf = "<mujoco" in text.lstrip()[:400]
+        raise FormatError(f"is a {'MuJoCo model (MJCF)' if mjcf else 'robot description (URDF / xacro / SDF)'}, "
+                          "not a camera profile", path=source, hint="derive a profile first: s2r profile "
+                          f"{'from-description' if mjcf else 'from-urdf'} {source} -o profile.yaml")
     if is_realsense_text(text):
         return "realsense"
     if "schema_version" in text:
@@ -115,11 +117,11 @@ def _is_kalibr_text(text: str, path: Path) -> bool:
 
 
 def _is_robot_description(path: Path, text: str) -> bool:
-    """True for URDF, xacro and SDF files (by suffix, or by their root element)."""
+    """True for URDF, xacro, SDF and MJCF files (by suffix, or by their root element)."""
     if path.name.endswith((".urdf", ".xacro", ".sdf", ".world", ".gazebo")):
         return True
     head = text.lstrip()[:400]
-    return head.startswith("<") and any(tag in head for tag in ("<robot", "<sdf", "<xacro:"))
+    return head.startswith("<") and any(tag in head for tag in ("<robot", "<sdf", "<xacro:", "<mujoco"))
 
 
 def _renamed(profile: StereoProfile, name: str | None) -> StereoProfile:

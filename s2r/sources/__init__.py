@@ -1,4 +1,4 @@
-"""Robot descriptions (URDF, xacro, SDF) to sim profiles, lint, and export back to Gazebo.
+"""Robot descriptions (URDF, xacro, SDF, MuJoCo MJCF) to sim profiles, lint, and export back to Gazebo.
 
 - :func:`load_description_profile`: a sim :class:`~s2r.profile.StereoProfile` from a description.
 - :func:`lint_description`: findings about a description's stereo pair (``s2r lint``).

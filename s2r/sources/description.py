@@ -23,7 +23,7 @@ __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIn
 FloatArray = NDArray[np.float64]
 #: Joint types that move; the path through them is evaluated at joint position zero.
 MOVABLE_JOINTS = frozenset({"revolute", "continuous", "prismatic", "planar", "floating", "ball", "universal",
-                            "revolute2", "screw", "gearbox"})
+                            "revolute2", "screw", "gearbox", "hinge", "slide", "free", "mocap"})
 #: Link-name endings that mark a link as an optical frame already (z forward, x right, y down).
 OPTICAL_SUFFIXES = ("_optical", "_optical_frame", "_optical_link")
 
@@ -116,6 +116,11 @@ class CameraSpec:
     index_in_sensor: int = 0
     cameras_in_sensor: int = 1
     lines: dict[str, int | None] = field(default_factory=dict)
+    #: What the reader noticed about this camera and the user should hear when it is chosen (MJCF: a camera mode
+    #: that moves with the simulation, an image size taken from the offscreen buffer).
+    remarks: tuple[str, ...] = ()
+    #: How the intrinsics were given (MJCF: ``fovy``, ``sensorsize + focalpixel + ...``); empty for Gazebo sensors.
+    intrinsics_form: str = ""
 
     @property
     def link_is_optical(self) -> bool:
@@ -169,3 +174,6 @@ class Description:
     notes: list[str] = field(default_factory=list)
     #: the simulator the file is written for, from the plugins it loads (:mod:`s2r.sources.simulator`)
     simulator: SimulatorGuess | None = None
+    #: Where movable joints are taken, in words (MJCF: "the model's initial state" or "keyframe N"); empty means
+    #: position 0 (URDF / SDF).
+    joint_state: str = ""

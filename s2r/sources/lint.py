@@ -281,8 +281,9 @@ def _profile_rule(report: _Report, description: Description, pair: Any) -> None:
 
 def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: Mapping[str, str] | None = None,
                      package_paths: Sequence[Path] = (), left: str | None = None,
-                     right: str | None = None, env: Mapping[str, str] | None = None) -> list[Finding]:
-    """Lint a URDF / xacro / SDF stereo rig (and optionally a published camera_info against it).
+                     right: str | None = None, env: Mapping[str, str] | None = None,
+                     keyframe: str | None = None) -> list[Finding]:
+    """Lint a URDF / xacro / SDF / MJCF stereo rig (and optionally a published camera_info against it).
 
     Args:
         path: the description file.
@@ -290,27 +291,37 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
             and ``camera_name`` (as :func:`s2r.formats.ros.read_camera_info` returns).
         xacro_args, package_paths, env: as for :func:`s2r.sources.load_description_profile`.
         left, right: camera names when the pair is not unambiguous.
+        keyframe: MJCF only: the ``<keyframe>`` (index or name) the bodies are read at.
 
     Returns:
         Findings, errors first. Unreadable input raises :class:`~s2r.errors.SourceError` instead.
     """
-    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths, env=env)
+    description = load_description(path, xacro_args=xacro_args, package_paths=package_paths, env=env, keyframe=keyframe)
     pair = stereo_pair(description, left=left, right=right)
     report = _Report(description)
     for joint in pair.movable_joints:
+        at = f"it is taken at {description.joint_state}" if description.joint_state else "its position 0 is assumed"
         report.add("warning", "movable-joint", f"joint {joint.name!r} ({joint.type}) lies between the camera "
-                   "links; its position 0 is assumed", "make it fixed if the cameras are rigidly mounted",
+                   f"links; {at}", "make it fixed if the cameras are rigidly mounted",
                    joint.line, f'name="{joint.name}"')
-    for camera in (pair.left, pair.right):
+    mjcf = description.kind == "mjcf"
+    for camera in (pair.left, pair.right) if not mjcf else ():
         _optical_link_rule(report, camera)
         _focal_rules(report, camera)
     for severity, code, message, fix, line, needles in baseline_findings(description, pair):
         report.add(severity, code, message, fix, line, *needles)
     if not any(f.severity == "error" and f.code.startswith("baseline-") for f in report.findings):
         _profile_rule(report, description, pair)  # a baseline error is the cause already named
-    _pair_rules(report, pair)
-    _hack_rules(report, pair)
-    _clip_rules(report, pair)
+    if mjcf:
+        from s2r.sources.mjcf_lint import mjcf_pair_findings
+
+        for severity, code, message, fix, line in mjcf_pair_findings(pair):
+            report.add(severity, code, message, fix, line)
+    else:
+        _pair_rules(report, pair)
+        _hack_rules(report, pair)
+    if not mjcf or pair.left.clip_near_m is not None:  # MuJoCo's clip planes scale with the model's extent
+        _clip_rules(report, pair)
     if camera_info is not None:
         _camera_info_rules(report, pair, camera_info)
     log_notes(description)

@@ -14,6 +14,7 @@ from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
 from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
+from s2r.sources.mjcf import parse_mjcf
 from s2r.sources.sdf import parse_sdf
 from s2r.sources.sdf_include import expand_includes
 from s2r.sources.simulator import infer_simulator
@@ -39,8 +40,12 @@ class StereoPair:
 
 
 def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None = None,
-                     package_paths: Sequence[Path] = (), env: Mapping[str, str] | None = None) -> Description:
-    """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` or ``.world`` file into a :class:`Description`.
+                     package_paths: Sequence[Path] = (), env: Mapping[str, str] | None = None,
+                     keyframe: str | None = None) -> Description:
+    """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` / ``.world`` or MJCF file into a :class:`Description`.
+
+    An MJCF model (``<mujoco>`` root, :mod:`s2r.sources.mjcf`) is read at its initial state, or at the
+    ``<keyframe>`` ``keyframe`` names (index or name).
 
     A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
     ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
@@ -64,9 +69,14 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         included, skipped = expand_includes(doc, package_paths)
         description = parse_sdf(doc)
         description.included_files, description.skipped_includes = included, skipped
+    elif doc.root.tag == "mujoco":
+        description = parse_mjcf(doc, keyframe=keyframe)
     else:
         raise SourceError(f"unknown root element <{doc.root.tag}>", path=source, field=f"<{doc.root.tag}>",
-                          hint="expected a URDF <robot> or an <sdf> document")
+                          hint="expected a URDF <robot>, an <sdf> document or a MuJoCo <mujoco> model")
+    if keyframe is not None and doc.root.tag != "mujoco":
+        raise SourceError("--keyframe is for MuJoCo (MJCF) models", path=source, field="--keyframe",
+                          hint="leave it out for URDF / SDF")
     description.source_text, description.expanded_text = text, expanded
     description.simulator = infer_simulator(doc, lines=not uses_xacro)
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
@@ -232,7 +242,8 @@ def stereo_pair(description: Description, *, left: str | None = None, right: str
     tree = KinematicTree(description)
     _, movable = tree.transform(cam_left.link, cam_right.link)
     for joint in movable:
-        logger.warning("%s: joint %r (%s) between the camera links is taken at position 0", description.path,
-                       joint.name, joint.type)
+        at = description.joint_state or "position 0"
+        logger.warning("%s: joint %r (%s) between the camera links is taken at %s", description.path,
+                       joint.name, joint.type, at)
     T = optical_pose_between(tree, cam_left, cam_right)
     return StereoPair(cam_left, cam_right, T, tuple(movable))

@@ -37,6 +37,7 @@ from s2r.sources.conventions import (
 )
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
 from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
+from s2r.sources.mjcf import SENSOR_TYPE as MJCF_SENSOR_TYPE
 
 __all__ = ["SEED_SGBM", "choose_convention", "load_description_profile", "profile_from_pair", "seed_matcher"]
 
@@ -131,7 +132,9 @@ def renders_as_link(spec: CameraSpec, *, tol_rad: float = 1e-3) -> bool:
 def _camera(spec: CameraSpec, convention: str, description: Description | None = None) -> Camera:
     k = intrinsics_for(spec.width, spec.height, spec.hfov_rad, convention, spec.lens)
     frame = spec.plugin.frame_name if spec.plugin and spec.plugin.frame_name else ""
-    if not frame.endswith(OPTICAL_SUFFIXES):
+    if spec.sensor_type == MJCF_SENSOR_TYPE:  # MuJoCo cameras have their own names; their optical frame is named so
+        frame = f"{spec.name}_optical_frame"
+    elif not frame.endswith(OPTICAL_SUFFIXES):
         frame = spec.link if renders_as_link(spec) else f"{spec.link}_optical_frame"
     return Camera(width_px=spec.width, height_px=spec.height, fx_px=k.fx, fy_px=k.fy, cx_px=k.cx, cy_px=k.cy,
                   skew=k.skew, distortion=_distortion(spec, k, convention, _simulator(spec, description, convention)),
@@ -162,15 +165,18 @@ def _extrinsics(pair: StereoPair, path: Path) -> Extrinsics:
 def load_description_profile(
     path: str | Path, *, convention: str | None = None, left: str | None = None, right: str | None = None,
     xacro_args: Mapping[str, str] | None = None, package_paths: Sequence[Path] = (), name: str | None = None,
-    allow_bad_baseline: bool = False, env: Mapping[str, str] | None = None,
+    allow_bad_baseline: bool = False, env: Mapping[str, str] | None = None, keyframe: str | None = None,
 ) -> StereoProfile:
-    """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors.
+    """A sim :class:`StereoProfile` from a URDF / xacro / SDF file with two camera sensors, or an MJCF model with
+    two cameras.
 
     Args:
-        path: ``.urdf``, ``.xacro``, ``.urdf.xacro``, ``.sdf`` or ``.world`` file.
+        path: ``.urdf``, ``.xacro``, ``.urdf.xacro``, ``.sdf``, ``.world`` or MJCF (``<mujoco>``) file.
         convention: pixel convention of the intrinsics: ``gazebo-classic``, ``gz-sim`` or ``exact``; None (default)
             infers it from the simulator the file loads plugins of (:func:`choose_convention`), logs which and why,
-            and records it in the provenance.
+            and records it in the provenance. MJCF: ``exact`` only (MuJoCo renders the exact pinhole, measured by
+            rendering).
+        keyframe: MJCF only: read the bodies at this ``<keyframe>`` (index or name) instead of the initial state.
         left, right: camera names (sensor, ``sensor/camera``, camera or link name) when not unambiguous.
         xacro_args: ``name:=value`` arguments of a xacro file.
         package_paths: folders searched for ``$(find pkg)`` before ``ROS_PACKAGE_PATH``.
@@ -191,18 +197,44 @@ def load_description_profile(
     source = Path(path)
     if convention is not None:
         check_convention(convention)
-    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths, env=env)
+    description = load_description(source, xacro_args=xacro_args, package_paths=package_paths, env=env,
+                                   keyframe=keyframe)
     pair = stereo_pair(description, left=left, right=right)
     _check_geometry(description, pair, allow=allow_bad_baseline)
     why = ""
-    if convention is None:
+    if description.kind == "mjcf":
+        convention = _mjcf_convention(description, convention)
+    elif convention is None:
         convention, why = choose_convention(description)
+    for camera in (pair.left, pair.right):
+        for remark in camera.remarks:
+            logger.warning("%s: camera %r: %s", description.path, camera.name, remark)
     profile = profile_from_pair(description, pair, convention=convention, name=name, xacro_args=xacro_args, env=env,
                                 convention_why=why)
     log_notes(description)  # said once the profile stands: an error stays the only line
     if why:
         logger.warning("%s: pixel convention %s, %s (pass --convention to choose)", source, convention, why)
     return profile
+
+
+def _mjcf_convention(description: Description, convention: str | None) -> str:
+    """MuJoCo renders the exact pinhole (measured by rendering): only ``exact`` is accepted for an MJCF model."""
+    if convention not in (None, "exact"):
+        raise SourceError(f"--convention {convention} describes Gazebo's published camera_info; MuJoCo renders the "
+                          "exact pinhole (optical axis at (W - 1) / 2 - principal offset)", path=description.path,
+                          field="--convention", hint="leave --convention out (or pass exact) for an MJCF model")
+    return "exact"
+
+
+def _resolve_convention(description: Description, convention: str | None) -> str:
+    """``convention`` or the description's default: MuJoCo renders in ``exact`` and only that is accepted for it."""
+    if description.kind != "mjcf":
+        return convention or "gazebo-classic"
+    if convention not in (None, "exact"):
+        raise SourceError(f"--convention {convention} describes Gazebo's published camera_info; MuJoCo renders the "
+                          "exact pinhole (optical axis at (W - 1) / 2 - principal offset)", path=description.path,
+                          field="--convention", hint="leave --convention out (or pass exact) for an MJCF model")
+    return "exact"
 
 
 def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
@@ -228,12 +260,17 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
     source = description.path
     args = " ".join(f"{k}:={v}" for k, v in sorted((xacro_args or {}).items()))
     passed = " ".join(f"{k}={v}" for k, v in sorted((env or {}).items()))
-    notes = "; ".join([f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); intrinsics from "
-                       f"horizontal_fov in the {convention} convention" + (f"; xacro args {args}" if args else "")
-                       + (f"; --env {passed}" if passed else ""),
+    how = (f"intrinsics as MuJoCo renders them (left {pair.left.intrinsics_form}, right {pair.right.intrinsics_form}),"
+           " exact pixel-centre convention" + ("" if pair.left.clip_near_m is not None else "; clip planes not read "
+                                                "(MuJoCo scales <map znear zfar> by the model's extent)")
+           if description.kind == "mjcf" else f"intrinsics from horizontal_fov in the {convention} convention")
+    notes = "; ".join([f"cameras {pair.left.name!r} (left) and {pair.right.name!r} (right); {how}"
+                       + (f"; xacro args {args}" if args else "") + (f"; --env {passed}" if passed else "")
+                       + "".join(f"; {c.name}: {r}" for c in (pair.left, pair.right) for r in c.remarks),
                        *([f"pixel convention {convention} {convention_why}"] if convention_why else []),
                        *description.notes])
     sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in [source, *description.included_files])
+    command = "from-description" if description.kind == "mjcf" else "from-urdf"  # shipped profiles stay as built
     try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
         left_cam = _camera(pair.left, convention, description)
         right_cam = _camera(pair.right, convention, description)
@@ -246,7 +283,7 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
             left=left_cam, right=right_cam, extrinsics=extrinsics,
             matcher=seed_matcher(left_cam.fx_px, baseline, left_cam.width_px, far_limit_m=simulation.clip_far_m),
             simulation=simulation,
-            provenance=Provenance(origin="sim", method=f"s2r profile from-urdf ({description.kind})",
+            provenance=Provenance(origin="sim", method=f"s2r profile {command} ({description.kind})",
                                   convention=convention, sources=sources, notes=notes),
         )
     except ValidationError as exc:

@@ -23,6 +23,8 @@ class XmlDoc:
     root: ET.Element
     path: Path
     lines: dict[int, int] = field(default_factory=dict)
+    #: The file an element was read from when it is not ``path`` (elements pulled in by an include).
+    files: dict[int, Path] = field(default_factory=dict)
 
     def line(self, element: ET.Element | None) -> int | None:
         """Source line (1-based) where ``element`` starts, or None when unknown."""

@@ -87,3 +87,8 @@ def test_robot_descriptions_point_to_from_urdf(tmp_path: Path) -> None:
         with pytest.raises(FormatError, match="robot description") as info:
             detect_format(path)
         assert "s2r profile from-urdf" in str(info.value) and str(path) in str(info.value)
+    scene = tmp_path / "scene.xml"
+    scene.write_text('<mujoco model="m"><worldbody/></mujoco>\n')
+    with pytest.raises(FormatError, match="MuJoCo model") as info:
+        detect_format(scene)
+    assert "s2r profile from-description" in str(info.value)

@@ -49,9 +49,17 @@ BASES: dict[str, tuple[str, str]] = {
     "opencv-xml": ("stereo.xml", opencv_to_text(RIG, xml=True)),
     "realsense": ("rs.txt", (FORMATS_DATA / "rs_enumerate_devices_d435.txt").read_text(encoding="utf-8")),
 }
+MJCF_RIG = """<mujoco><compiler angle="degree" eulerseq="xyz"/><visual><global offwidth="800" offheight="600"/></visual>
+  <default><camera fovy="50"/><default class="rig"><camera resolution="640 480" sensorsize="0.0048 0.0036"
+    focalpixel="610 605" principalpixel="2.5 -1.5" xyaxes="0 -1 0 0 0 1"/></default></default>
+  <worldbody><body name="base" pos="0 0 0.4" euler="0 5 10"><joint type="hinge" axis="0 0 1"/><geom size="0.1"/>
+    <frame pos="0.1 0 0.2" axisangle="0 1 0 -4"><body name="head" childclass="rig" pos="0 0 0.1" quat="1 0 0 0.02">
+      <camera name="left" pos="0 0.045 0"/><camera name="right" pos="0 -0.045 0" mode="track"/>
+  </body></frame></body></worldbody></mujoco>"""
 DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "urdf": ("rig.urdf", two_camera_urdf()),
     "sdf": ("rig.sdf", XBOT_SDF.read_text(encoding="utf-8")),
+    "mjcf": ("scene.xml", MJCF_RIG),
 }
 ODD_NUMBERS = ["0", "-1", "1e308", "-1e308", "1e-300", "nan", "inf", "", "abc", "7", "100000", "2199023255552",
                "3.14159265", "1e6", '"5"', "0x10", "1_000"]
