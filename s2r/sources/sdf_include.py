@@ -56,7 +56,10 @@ class SkippedInclude:
 
 @dataclass(frozen=True)
 class _Result:
-    root: ET.Element
+    """What the child returns: the expanded tree as XML bytes (pickling an Element tree is ~50x slower than
+    serialising it) and each element's line, in document order."""
+
+    xml: bytes
     lines: list[int | None]
     included: list[Path]
     skipped: list[SkippedInclude]
@@ -101,6 +104,7 @@ class _Expander:
             return None
         with self.budget.nested(path, including_file=file, field=field):
             inner = parse_xml(self.budget.read(path, including_file=file, field=field), path)
+            self.budget.add_elements(len(inner.lines), including_file=file, field=field)
             self.lines.update(inner.lines)
             model = inner.root if inner.root.tag == "model" else inner.root.find("model")
             if model is None:
@@ -122,7 +126,7 @@ def _expand(doc: XmlDoc, roots: Sequence[Path], budget: IncludeBudget) -> _Resul
     with budget.top(doc.path):
         expander.expand(doc.root, doc.path)
     lines = [expander.lines.get(id(e)) for e in doc.root.iter()]
-    return _Result(doc.root, lines, list(budget.included), expander.skipped)
+    return _Result(ET.tostring(doc.root), lines, list(budget.included), expander.skipped)
 
 
 def expand_includes(doc: XmlDoc, package_paths: Sequence[Path] = (), *,
@@ -142,6 +146,6 @@ def expand_includes(doc: XmlDoc, package_paths: Sequence[Path] = (), *,
     spent = budget or IncludeBudget()
     result = run_limited(lambda: _expand(doc, roots, spent), path=doc.path, what="SDF include expansion",
                          limits=INCLUDE_LIMITS, field="<include>", hint=_LIMIT_HINT)
-    doc.root = result.root
-    doc.lines = {id(e): line for e, line in zip(result.root.iter(), result.lines, strict=True) if line is not None}
+    doc.root = ET.fromstring(result.xml)  # s2r's own serialisation of an already checked tree: no DOCTYPE possible
+    doc.lines = {id(e): line for e, line in zip(doc.root.iter(), result.lines, strict=True) if line is not None}
     return result.included, result.skipped

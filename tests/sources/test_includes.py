@@ -238,3 +238,15 @@ def test_models_nested_thousands_deep_are_one_error_not_a_recursion_error(tmp_pa
     deep.write_text("<sdf>" + '<model name="m">' * 5000 + "</model>" * 5000 + "</sdf>")
     code, text = _cli(["lint", str(deep)], capsys)
     assert code == 2 and text.count("\n") == 1 and "models nested more than 64 deep" in text
+
+
+def test_a_large_included_file_and_many_elements_stop_on_the_budget(tmp_path: Path) -> None:
+    (tmp_path / "big.sdf").write_text('<sdf><model name="big">' + "<a/>" * 600_000 + "</model></sdf>")
+    with pytest.raises(SourceError, match=r"included file 'big\.sdf': \d+ bytes, over the 2 MiB"):
+        load_description_profile(_world(tmp_path, "big.sdf"))
+    (tmp_path / "many.sdf").write_text('<sdf><model name="many">' + "<a/>" * 60_000 + "</model></sdf>")
+    world = tmp_path / "two.sdf"
+    world.write_text('<sdf><world name="w"><include><uri>many.sdf</uri><name>a</name></include>'
+                     '<include><uri>many.sdf</uri><name>b</name></include></world></sdf>')
+    with pytest.raises(SourceError, match="the included files hold more than 100000 XML elements"):
+        load_description_profile(world)
