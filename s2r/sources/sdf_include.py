@@ -2,15 +2,17 @@
 
 A ``model://NAME`` URI names a model folder ``NAME`` found in, in order: the ``--package-path`` folders,
 ``GZ_SIM_RESOURCE_PATH`` (gz-sim), ``IGN_GAZEBO_RESOURCE_PATH`` (older gz-sim) and ``GAZEBO_MODEL_PATH``
-(Gazebo classic), each a ``:``-separated list, then the description's own folder. The folder's ``model.config``
+(Gazebo classic), each a ``:``-separated list, then the description's own folder and its ROS package (the nearest
+folder up to 3 levels above holding a ``package.xml``, as for xacro). The folder's ``model.config``
 names the SDF file (``<sdf>model.sdf</sdf>``; default ``model.sdf``). The included ``<model>`` replaces the
 ``<include>``, renamed by the include's ``<name>`` and placed by its ``<pose>`` (which wins over the model's own).
 
 Where a URI may point and how much may be included is :mod:`s2r.sources.includes` (confined to those folders; a
-depth, file and byte budget over the whole expansion). The expansion runs in a child process under the same CPU,
-memory and wall-clock limits as xacro (:mod:`s2r.sources.isolation`). Includes that name nothing here (an unknown
-model, a web/Fuel URI) are left out and returned as :class:`SkippedInclude`: the caller decides whether the cameras
-asked for could be in them (:func:`s2r.sources.loader.stereo_pair`).
+depth, file, byte and element budget over the whole expansion). The expansion runs in a child process under CPU,
+memory and wall-clock limits as xacro does (:mod:`s2r.sources.isolation`; :data:`INCLUDE_LIMITS`, tighter).
+Includes that name nothing here (an unknown model, a web/Fuel URI) are left out and returned as
+:class:`SkippedInclude`: the caller decides whether the cameras asked for could be in them
+(:func:`s2r.sources.loader.stereo_pair`).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from pathlib import Path
 from s2r.errors import SourceError
 from s2r.sources.includes import IncludeBudget, MissingInclude, is_cameraless, resolve
 from s2r.sources.isolation import Limits, run_limited
+from s2r.sources.xacro_sandbox import allowed_roots
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["INCLUDE_LIMITS", "MODEL_PATH_ENVS", "SkippedInclude", "expand_includes", "model_search_roots"]
@@ -142,7 +145,7 @@ def expand_includes(doc: XmlDoc, package_paths: Sequence[Path] = (), *,
     """
     if not any(e.tag == "include" for e in doc.root.iter()):
         return [], []
-    roots = [*model_search_roots(package_paths), doc.path.resolve().parent]
+    roots = [*model_search_roots(package_paths), *allowed_roots(doc.path, ())]  # + its folder and ROS package
     spent = budget or IncludeBudget()
     result = run_limited(lambda: _expand(doc, roots, spent), path=doc.path, what="SDF include expansion",
                          limits=INCLUDE_LIMITS, field="<include>", hint=_LIMIT_HINT)

@@ -250,3 +250,17 @@ def test_a_large_included_file_and_many_elements_stop_on_the_budget(tmp_path: Pa
                      '<include><uri>many.sdf</uri><name>b</name></include></world></sdf>')
     with pytest.raises(SourceError, match="the included files hold more than 100000 XML elements"):
         load_description_profile(world)
+
+
+def test_a_world_may_include_from_its_own_ros_package(tmp_path: Path) -> None:
+    """worlds/ and models/ side by side in one ROS package (package.xml above): allowed, as for xacro; the folder
+    above the package is not."""
+    package = tmp_path / "my_gazebo"
+    (package / "models" / "cam").mkdir(parents=True)
+    (package / "package.xml").write_text("<package><name>my_gazebo</name></package>")
+    (package / "models" / "cam" / "model.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
+    world = _world(package / "worlds", "../models/cam")
+    assert load_description_profile(world).baseline_m == pytest.approx(0.07, abs=1e-12)
+    (tmp_path / "cam.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
+    with pytest.raises(SourceError, match="points outside"):
+        load_description_profile(_world(package / "worlds", "../../cam.sdf", name="up.sdf"))
