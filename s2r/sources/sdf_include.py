@@ -35,6 +35,8 @@ MODEL_PATH_ENVS = ("GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "GAZEBO_M
 #: Resource limits of an SDF include expansion (the budget of :class:`IncludeBudget` stops it long before).
 INCLUDE_LIMITS = Limits(cpu_s=5, memory_bytes=1 << 30, wall_s=8.0)
 _LIMIT_HINT = "includes that fan out or nest without end; fix the file"
+#: What an included file may hold instead of a ``<model>`` (Gazebo's own ``sun`` is a ``<light>``): no camera there.
+_NO_CAMERA_TAGS = ("light", "actor")
 
 
 @dataclass(frozen=True)
@@ -110,6 +112,9 @@ class _Expander:
             self.budget.add_elements(len(inner.lines), including_file=file, field=field)
             self.lines.update(inner.lines)
             model = inner.root if inner.root.tag == "model" else inner.root.find("model")
+            if model is None and (inner.root.tag in _NO_CAMERA_TAGS or any(
+                    inner.root.find(tag) is not None for tag in _NO_CAMERA_TAGS)):
+                return None  # model://sun is a <light>: nothing a camera could be on
             if model is None:
                 raise SourceError(f"included file {path.name!r} holds no <model>", path=file, field=field,
                                   hint="include a model's SDF")

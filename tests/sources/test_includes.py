@@ -264,3 +264,14 @@ def test_a_world_may_include_from_its_own_ros_package(tmp_path: Path) -> None:
     (tmp_path / "cam.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
     with pytest.raises(SourceError, match="points outside"):
         load_description_profile(_world(package / "worlds", "../../cam.sdf", name="up.sdf"))
+
+
+def test_an_installed_sun_model_is_a_light_and_is_left_out(tmp_path: Path) -> None:
+    """With Gazebo's model folder on the path, model://sun resolves to an SDF holding a <light>, not a <model>."""
+    sun = tmp_path / "models" / "sun"
+    sun.mkdir(parents=True)
+    (sun / "model.config").write_text("<model><name>Sun</name><sdf version='1.6'>model.sdf</sdf></model>")
+    (sun / "model.sdf").write_text('<sdf version="1.6"><light type="directional" name="sun"/></sdf>')
+    profile = load_description_profile(FIXTURES / "world_inline_cameras.world", package_paths=[tmp_path / "models"])
+    assert profile.baseline_m == pytest.approx(0.1, abs=1e-12)
+    assert [Path(s.path).name for s in profile.provenance.sources][1:] == ["model.config", "model.sdf"]
