@@ -9,10 +9,10 @@ Every reader that follows includes (SDF ``<include><uri>``; an MJCF reader's ``<
   ``model://`` URI with a ``..`` component is refused as such; any other URI that lands outside every root is refused
   BEFORE anything is looked up there, with one message that is the same whether or not a file exists at that path.
 - **How much.** The budget counts include depth across nested resolves (a file that includes itself is named as
-  such; a chain deeper than ``max_depth`` is refused), every file read (``max_files``) and every byte read
-  (``max_bytes``) over the whole expansion, so 7 levels of 12 includes (12^7 files) stop after ``max_files`` reads
-  instead of growing for minutes. Each file is read with :func:`s2r.fileio.read_regular_file` (no FIFO, device or
-  over-long file).
+  such; a chain deeper than ``max_depth`` is refused), every file read (``max_files``), every byte read
+  (``max_bytes``) and every XML element (``max_elements``) over the whole expansion, so 7 levels of 12 includes
+  (12^7 files) stop after ``max_files`` reads instead of growing for minutes. Each file is read with
+  :func:`s2r.fileio.read_regular_file` (no FIFO, device or over-long file).
 
 Unknown models and web (Fuel) URIs raise :class:`MissingInclude`, which a reader may defer: a world that includes
 ``model://sun`` need not fail when the cameras asked for are defined inline.
@@ -205,13 +205,16 @@ class IncludeBudget:
         max_depth: includes nested deeper than this are refused (counted across nested resolves).
         max_files: files read over the whole expansion (every include counts, repeated ones too).
         max_bytes: bytes read over the whole expansion.
+        max_elements: XML elements the included files may hold in all (:meth:`add_elements`).
     """
 
     max_depth: int = 8
     max_files: int = 256
-    max_bytes: int = 16 << 20
+    max_bytes: int = 2 << 20
+    max_elements: int = 100_000
     files: int = 0
     bytes: int = 0
+    elements: int = 0
     included: list[Path] = field(default_factory=list)
     _stack: list[Path] = field(default_factory=list)
     _top: int = 0
@@ -239,6 +242,13 @@ class IncludeBudget:
             yield
         finally:
             self._stack.pop()
+
+    def add_elements(self, count: int, *, including_file: Path, field: str) -> None:
+        """Count ``count`` more XML elements brought in by an include; SourceError past ``max_elements``."""
+        self.elements += count
+        if self.elements > self.max_elements:
+            raise SourceError(f"the included files hold more than {self.max_elements} XML elements",
+                              path=including_file, field=field, hint="include smaller models")
 
     def read(self, path: Path, *, including_file: Path, field: str) -> str:
         """``path``'s text, counted against the budget; SourceError when a limit is passed or it is unreadable."""

@@ -155,9 +155,9 @@ def select_pair(description: Description, *, left: str | None = None,
                               hint="describe the cameras as SDF <sensor type='camera'> (Gazebo classic or gz-sim)")
         switches = sorted(set(re.findall(r"\$\((?:opt)?env\s+([A-Za-z_][A-Za-z0-9_]*)", description.source_text or "")))
         if switches:  # Clearpath: payloads are switched on by environment variables s2r does not read
-            shown = ", ".join(switches[:6]) + (", ..." if len(switches) > 6 else "")
+            listed = ", ".join(switches[:6]) + (", ..." if len(switches) > 6 else "")
             raise SourceError("no camera sensor found", path=description.path, field="<sensor>",
-                              hint=f"this description reads environment variables ({shown}) that s2r does not take "
+                              hint=f"this description reads environment variables ({listed}) that s2r does not take "
                               "from the machine: pass the ones that switch the cameras on with --env NAME=VALUE "
                               f"(e.g. --env {switches[0]}=1)")
         raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)

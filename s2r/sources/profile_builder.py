@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import math
 import re
@@ -12,7 +13,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from s2r.errors import SourceError
-from s2r.fileio import sha256_file
+from s2r.fileio import MAX_TEXT_BYTES, read_regular_file, sha256_file
 from s2r.geometry import opencv_extrinsics_from_pose
 from s2r.profile import (
     Camera,
@@ -148,6 +149,15 @@ def _simulation(spec: CameraSpec) -> SimulationSettings:
                               noise_stddev=spec.noise.stddev if spec.noise else None)
 
 
+def _included_sha256(path: Path, source: Path) -> str:
+    """sha256 of an included file, read as every input is (regular file, bounded); SourceError when it changed."""
+    try:
+        return hashlib.sha256(read_regular_file(path, limit=MAX_TEXT_BYTES)).hexdigest()
+    except (OSError, ValueError):
+        raise SourceError(f"included file {path.name!r} changed while it was read", path=source, field="<include>",
+                          hint="run again") from None
+
+
 def _default_name(path: Path) -> str:
     stem = path.name.split(".")[0]
     return re.sub(r"[^A-Za-z0-9_.\-]", "_", stem) or "sim_rig"
@@ -269,7 +279,8 @@ def profile_from_pair(description: Description, pair: StereoPair, *, convention:
                        + "".join(f"; {c.name}: {r}" for c in (pair.left, pair.right) for r in c.remarks),
                        *([f"pixel convention {convention} {convention_why}"] if convention_why else []),
                        *description.notes])
-    sources = tuple(SourceFile(path=str(p), sha256=sha256_file(p)) for p in [source, *description.included_files])
+    sources = (SourceFile(path=str(source), sha256=sha256_file(source)),
+               *(SourceFile(path=str(p), sha256=_included_sha256(p, source)) for p in description.included_files))
     command = "from-description" if description.kind == "mjcf" else "from-urdf"  # shipped profiles stay as built
     try:  # every model built here is validated (bounds of s2r.profile): a bad value is one SourceError
         left_cam = _camera(pair.left, convention, description)

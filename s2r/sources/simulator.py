@@ -20,6 +20,7 @@ import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+from s2r.sources.includes import shown
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["SIMULATORS", "SimulatorGuess", "infer_simulator"]
@@ -45,9 +46,9 @@ class SimulatorGuess:
     evidence: str = ""
 
 
-def _where(doc: XmlDoc, element: ET.Element, shown: str, lines: bool) -> str:
+def _where(doc: XmlDoc, element: ET.Element, label: str, lines: bool) -> str:
     line = doc.line(element) if lines else None
-    return shown + (f" line {line}" if line else "")
+    return label + (f" line {line}" if line else "")
 
 
 def _evidence(doc: XmlDoc, lines: bool) -> dict[str, list[str]]:
@@ -56,13 +57,13 @@ def _evidence(doc: XmlDoc, lines: bool) -> dict[str, list[str]]:
         tag = element.tag if isinstance(element.tag, str) else ""
         if tag == "plugin":
             filename, name = element.get("filename", "").strip(), element.get("name", "").strip()
-            shown = f"<plugin filename={filename!r}>"
+            label = f"<plugin filename={filename!r}>"
             if _GZ_FILE.match(filename) or _GZ_NAME.match(name):
-                found["gz-sim"].append(_where(doc, element, shown, lines))
+                found["gz-sim"].append(_where(doc, element, label, lines))
             elif _CLASSIC_FILE.match(filename):
-                found["gazebo-classic"].append(_where(doc, element, shown, lines))
+                found["gazebo-classic"].append(_where(doc, element, label, lines))
         elif tag in _GZ_TAGS:
-            text = (element.text or "").strip()[:40]
+            text = shown((element.text or "").strip(), 40)
             found["gz-sim"].append(_where(doc, element, f"<{tag}>{text}</{tag}>", lines))
     return found
 

@@ -238,3 +238,40 @@ def test_models_nested_thousands_deep_are_one_error_not_a_recursion_error(tmp_pa
     deep.write_text("<sdf>" + '<model name="m">' * 5000 + "</model>" * 5000 + "</sdf>")
     code, text = _cli(["lint", str(deep)], capsys)
     assert code == 2 and text.count("\n") == 1 and "models nested more than 64 deep" in text
+
+
+def test_a_large_included_file_and_many_elements_stop_on_the_budget(tmp_path: Path) -> None:
+    (tmp_path / "big.sdf").write_text('<sdf><model name="big">' + "<a/>" * 600_000 + "</model></sdf>")
+    with pytest.raises(SourceError, match=r"included file 'big\.sdf': \d+ bytes, over the 2 MiB"):
+        load_description_profile(_world(tmp_path, "big.sdf"))
+    (tmp_path / "many.sdf").write_text('<sdf><model name="many">' + "<a/>" * 60_000 + "</model></sdf>")
+    world = tmp_path / "two.sdf"
+    world.write_text('<sdf><world name="w"><include><uri>many.sdf</uri><name>a</name></include>'
+                     '<include><uri>many.sdf</uri><name>b</name></include></world></sdf>')
+    with pytest.raises(SourceError, match="the included files hold more than 100000 XML elements"):
+        load_description_profile(world)
+
+
+def test_a_world_may_include_from_its_own_ros_package(tmp_path: Path) -> None:
+    """worlds/ and models/ side by side in one ROS package (package.xml above): allowed, as for xacro; the folder
+    above the package is not."""
+    package = tmp_path / "my_gazebo"
+    (package / "models" / "cam").mkdir(parents=True)
+    (package / "package.xml").write_text("<package><name>my_gazebo</name></package>")
+    (package / "models" / "cam" / "model.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
+    world = _world(package / "worlds", "../models/cam")
+    assert load_description_profile(world).baseline_m == pytest.approx(0.07, abs=1e-12)
+    (tmp_path / "cam.sdf").write_text(f'<sdf><model name="cam">{CAMERA_LINK}</model></sdf>')
+    with pytest.raises(SourceError, match="points outside"):
+        load_description_profile(_world(package / "worlds", "../../cam.sdf", name="up.sdf"))
+
+
+def test_an_installed_sun_model_is_a_light_and_is_left_out(tmp_path: Path) -> None:
+    """With Gazebo's model folder on the path, model://sun resolves to an SDF holding a <light>, not a <model>."""
+    sun = tmp_path / "models" / "sun"
+    sun.mkdir(parents=True)
+    (sun / "model.config").write_text("<model><name>Sun</name><sdf version='1.6'>model.sdf</sdf></model>")
+    (sun / "model.sdf").write_text('<sdf version="1.6"><light type="directional" name="sun"/></sdf>')
+    profile = load_description_profile(FIXTURES / "world_inline_cameras.world", package_paths=[tmp_path / "models"])
+    assert profile.baseline_m == pytest.approx(0.1, abs=1e-12)
+    assert [Path(s.path).name for s in profile.provenance.sources][1:] == ["model.config", "model.sdf"]
