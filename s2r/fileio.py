@@ -192,6 +192,7 @@ class OutputBatch:
         self.force = force
         self.root = None if root is None else Path(root)
         self._staged: list[tuple[str, Path]] = []
+        self._names: set[Path] = set()
 
     def __enter__(self) -> OutputBatch:
         return self
@@ -208,9 +209,10 @@ class OutputBatch:
     def add_bytes(self, path: str | Path, data: bytes) -> Path:
         """Stage ``data`` for ``path`` (checked now and again at :meth:`publish`); returns ``path``."""
         out = self._check(path)
-        if any(staged == out for _, staged in self._staged):
+        if out in self._names:
             raise ValueError(f"{out} is staged twice")
         self._staged.append((_write_temporary(out, data), out))
+        self._names.add(out)
         return out
 
     def add_text(self, path: str | Path, text: str) -> Path:
@@ -222,6 +224,7 @@ class OutputBatch:
         for tmp_name, _ in self._staged:
             Path(tmp_name).unlink(missing_ok=True)
         self._staged.clear()
+        self._names.clear()
 
     def publish(self) -> list[Path]:
         """Move every staged file into place, all or none; the final paths in the order they were added."""

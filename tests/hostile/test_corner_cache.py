@@ -10,11 +10,13 @@ import os
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from s2r.calib.detect import CornerCache, Detection
 from s2r.calib.synth import write_stereo_set
 from s2r.cli import main
+from s2r.targets import CharucoTarget
 from tests.conftest import make_rig
 from tests.hostile._limits import run_s2r
 
@@ -53,6 +55,20 @@ def test_a_valid_entry_is_read_back(tmp_path: Path) -> None:
     _entry(cache).write_text(json.dumps(_good()), encoding="utf-8")
     hit = cache.get("view", SHA, PATTERN)
     assert isinstance(hit, Detection) and hit.cached and hit.corners is not None and hit.corners.shape == (54, 2)
+
+
+def test_a_target_entry_round_trips_and_needs_its_ids(tmp_path: Path) -> None:
+    target = CharucoTarget(target_type="charuco", squaresX=5, squaresY=4, squareLength=0.04, markerLength=0.03,
+                           dictionary="DICT_4X4_50")
+    cache = CornerCache(tmp_path / "c", target)
+    corners = np.array([[10.0, 20.0], [30.0, 40.0], [50.0, 60.0]], np.float32)  # a cut view: 3 of 12 corners
+    cache.put(Detection("v", SHA, "ok", size=(640, 480), corners=corners, ids=np.array([0, 4, 7], np.int32)),
+              PATTERN)
+    hit = cache.get("view", SHA, PATTERN)
+    assert hit is not None and hit.ids is not None and hit.ids.tolist() == [0, 4, 7]
+    entry = cache._file(SHA, PATTERN)
+    entry.write_text(json.dumps({**json.loads(entry.read_text(encoding="utf-8")), "ids": None}), encoding="utf-8")
+    assert cache.get("view", SHA, PATTERN) is None
 
 
 @pytest.mark.parametrize("kind", sorted(BAD_ENTRIES))
