@@ -200,6 +200,11 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
     if extra.get("zero_distortion") is True and coeffs and coeffs[-1] == ZERO_DISTORTION_MARKER:
         coeffs[-1] = 0.0  # the marker s2r wrote so image_proc rectifies: the camera has no distortion
     distortion = distortion_for(model, coeffs, source, keys["D"])
+    if keys["R"] not in data and keys["P"] not in data:
+        raise FormatError(f"holds one camera's intrinsics but no stereo extrinsics (no {keys['R']}, no {keys['P']})",
+                          path=source, field=keys["R"], hint="a stereo profile needs the pair's rectified camera_info "
+                          "(R and P, as camera_calibration writes them) or a stereo calibration file (OpenCV R T, "
+                          "Kalibr camchain)")
     R = rotation_as_printed(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"], zero_is_identity=True)
     P = _matrix_field(data, keys["P"], (3, 4), source)
     build_camera(K=K, size=(width, height), distortion=distortion, path=source, field=keys["K"])
