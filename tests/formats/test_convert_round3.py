@@ -87,3 +87,16 @@ def test_t_in_millimetres_names_units_m(tmp_path: Path, capsys: pytest.CaptureFi
     assert main(["profile", "convert", str(src), "--to", "s2r", "-o", str(tmp_path / "p.yaml"), "--units-m",
                  "0.001"]) == 0
     assert load_any(tmp_path / "p.yaml").baseline_m == pytest.approx(0.0640004, abs=1e-7)
+
+
+def test_lint_reads_a_camera_file_without_r_and_p(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The seed's published K (fx 381.36 at 640 px: 80 deg) with no R and P: lint compares it (exit 1, the FOV
+    finding), instead of stopping at a missing rectification_matrix."""
+    from tests.sources.rigs import SEED_URDF
+
+    path = tmp_path / "left_camera_info.yaml"
+    path.write_text("image_width: 640\nimage_height: 480\ncamera_name: left\ncamera_matrix:\n  rows: 3\n  cols: 3\n"
+                    "  data: [381.36, 0, 320.5, 0, 381.36, 240.5, 0, 0, 1]\ndistortion_model: plumb_bob\n"
+                    "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n")
+    assert main(["lint", str(SEED_URDF), "--camera-info", str(path)]) == 1
+    assert "80.0 deg" in capsys.readouterr().out
