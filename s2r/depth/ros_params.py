@@ -16,7 +16,6 @@ from typing import Any
 import yaml
 
 from s2r.depth.presets import MatcherConfig, resolve_preset
-from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.rectification import stereo_rectification
 
@@ -93,16 +92,12 @@ def ros_disparity_yaml(config: MatcherConfig, *, profile_name: str) -> tuple[str
 
 def ros_disparity_file(profile: StereoProfile) -> dict[str, str]:
     """``{ROS_DISPARITY_FILE: text}`` for ``profile``'s matcher (its ``profile`` preset, the disparity range
-    derived as ``s2r depth`` derives it), each clamp logged as a warning; empty (with a warning when the matcher
-    does not fit the image) for a vertical pair, which stereo_image_proc cannot match (rows only)."""
+    derived as ``s2r depth`` derives it), each clamp logged as a warning; empty for a vertical pair
+    (stereo_image_proc matches along rows only)."""
     if abs(profile.T[1]) > abs(profile.T[0]):
         return {}
     rect = stereo_rectification(profile, alpha=0.0)
-    try:
-        config = resolve_preset("profile", profile, fx_px=float(rect.P1[0, 0]), baseline_m=rect.baseline_m)
-    except DepthError as exc:  # the camera_info pair is still right: say why the parameter file is missing
-        log.warning("%s not written: %s (%s)", ROS_DISPARITY_FILE, exc.message, exc.hint)
-        return {}
+    config = resolve_preset("profile", profile, fx_px=float(rect.P1[0, 0]), baseline_m=rect.baseline_m)
     text, notes = ros_disparity_yaml(config, profile_name=profile.name)
     for note in notes:
         log.warning("%s: %s", ROS_DISPARITY_FILE, note)

@@ -103,12 +103,3 @@ def test_disparity_range_below_ros_minimum_is_raised_and_said(tmp_path: Path,
     params = yaml.safe_load((tmp_path / "ros" / "stereo_image_proc.yaml").read_text())
     assert params["disparity_range"] == 32 and "disparity_range 16 is outside" in err
     assert params["correlation_window_size"] == 5 and "correlation_window_size 3 is outside" in err
-
-
-def test_matcher_that_does_not_fit_skips_only_the_parameter_file(tmp_path: Path,
-                                                                  capsys: pytest.CaptureFixture[str]) -> None:
-    src = tmp_path / "rig.yaml"
-    dump_profile(_rotated(num_disparities=320), src)  # 320 disparities on a 320 px image
-    assert main(["profile", "convert", str(src), "--to", "ros", "-o", str(tmp_path / "ros")]) == 0
-    assert "stereo_image_proc.yaml not written: disparity range 0+320 px does not fit" in capsys.readouterr().err
-    assert sorted(p.name for p in (tmp_path / "ros").iterdir()) == ["left.yaml", "right.yaml"]
