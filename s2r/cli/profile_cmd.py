@@ -67,6 +67,11 @@ def _register_convert(profile_sub: Any) -> None:
                         "ZED conf: which section (2208x1242, 1920x1080, 1280x720 or 672x376; default 1280x720)")
     p_conv.add_argument("--left", metavar="CAM", help="Kalibr camchain: the left camera (camN; default cam0)")
     p_conv.add_argument("--right", metavar="CAM", help="Kalibr camchain: the right camera (camM; default cam1)")
+    p_conv.add_argument("--swap", action="store_true",
+                        help="exchange the left and right cameras (a file whose right camera sits on the left)")
+    p_conv.add_argument("--allow-bad-baseline", action="store_true",
+                        help="write a pair whose right camera sits on the left or along the optical axis anyway "
+                        "(refused by default, as from-urdf and s2r lint do)")
     p_conv.add_argument("--drop-k3", action="store_true",
                         help="Kalibr export: drop a non-zero k3 (radtan has none) instead of refusing")
     add_force(p_conv)
@@ -220,7 +225,7 @@ def _convert_mono(path: Path, args: argparse.Namespace) -> int:
 
 
 def _cmd_convert(args: argparse.Namespace) -> int:
-    from s2r.formats.detect import FORMAT_NAMES, detect_format, load_any
+    from s2r.formats.detect import FORMAT_NAMES, check_layout, detect_format, load_any, swap_cameras
     from s2r.formats.mono import is_mono_profile_file
     from s2r.registry import resolve_profile
 
@@ -232,14 +237,19 @@ def _cmd_convert(args: argparse.Namespace) -> int:
         return _convert_mono(Path(sources[0]), args)
     fmt = detect_format(sources[0])
     profile = load_any(sources, name=args.name, origin=args.origin, image_size=args.image_size,
-                       t_scale_m=args.units_m, resolution=args.resolution, cameras=(args.left, args.right))
+                       t_scale_m=args.units_m, resolution=args.resolution, cameras=(args.left, args.right),
+                       layout_warning=False)
+    if args.swap:
+        profile = swap_cameras(profile)
+    check_layout(profile, sources[-1], allow_bad_baseline=args.allow_bad_baseline)
     written = _write(profile, args)
     if args.json:
         print_json({"input_format": fmt, "inputs": sources, "output_format": args.to,
                     "outputs": [str(p) for p in written], "profile": profile_summary(profile)})
         return 0
     method = profile.provenance.method
-    found = method.removeprefix("imported from ") if method.startswith("imported from ") else FORMAT_NAMES[fmt]
+    found = method.removeprefix("imported from ") if method.startswith("imported from ") and fmt != "s2r" else \
+        FORMAT_NAMES[fmt]  # an s2r profile is read as s2r YAML, whatever format it was first imported from
     print(f"read {found}: {', '.join(sources)} -> profile {profile.name} "
           f"({profile.image_size[0]}x{profile.image_size[1]}, baseline {1000 * profile.baseline_m:.2f} mm)")
     for path in written:

@@ -233,6 +233,9 @@ def rotation_as_printed(rot: FloatArray, path: str | Path, field: str, *, zero_i
     stay rotations. ``zero_is_identity``: an all-zero matrix (some ROS drivers publish R = 0 for an unrectified
     camera) is read as the identity with a warning.
     """
+    if rot.shape != (3, 3):
+        raise FormatError(f"expected a 3x3 rotation, got {rot.size} numbers in shape {rot.shape}", path=path,
+                          field=field)
     if zero_is_identity and not np.any(rot):
         log.warning("%s: %s is all zeros; read as the identity (an unrectified camera)", path, field)
         return np.eye(3)

@@ -24,7 +24,8 @@ from s2r.formats.zed import is_zed_conf, load_zed
 from s2r.geometry import baseline_layout_problem
 from s2r.profile import StereoProfile
 
-__all__ = ["FORMAT_NAMES", "Format", "detect_format", "load_any", "warn_implausible_baseline"]
+__all__ = ["FORMAT_NAMES", "Format", "check_layout", "detect_format", "load_any", "swap_cameras",
+           "warn_implausible_baseline"]
 
 log = logging.getLogger(__name__)
 
@@ -158,6 +159,7 @@ def load_any(
     t_scale_m: float = 1.0,
     resolution: tuple[int, int] | None = None,
     cameras: tuple[str | None, str | None] = (None, None),
+    layout_warning: bool = True,
 ) -> StereoProfile:
     """Load a stereo profile from any supported format, detected from content.
 
@@ -170,6 +172,8 @@ def load_any(
         t_scale_m: metres per unit of an OpenCV file's T (its square size when calibrated in squares).
         resolution: ``(width, height)`` of the RealSense infrared streams (or the ZED section) to import.
         cameras: ``(left, right)`` camera names of a Kalibr camchain (``camN``); default cam0 and cam1.
+        layout_warning: warn about a pair lint calls a baseline error (False when the caller checks it itself
+            with :func:`check_layout`).
 
     A baseline that is implausible for the camera (under 2 mm, or over 1 m when near objects would leave the
     image) is reported as a warning: a T in board squares or millimetres often looks like metres.
@@ -185,9 +189,47 @@ def load_any(
                                t_scale_m=t_scale_m, resolution=resolution, cameras=cameras)
     warn_implausible_baseline(profile, files[-1])
     problem = baseline_layout_problem(-profile.R.T @ profile.T)
-    if problem is not None:  # the rule lint and from-urdf apply; --to ros refuses such a pair
-        log.warning("%s: ERROR [%s] %s: swap the left and right inputs", files[-1], *problem)
+    if problem is not None and layout_warning:  # lint's and from-urdf's rule; convert and --to ros refuse it
+        log.warning("%s: ERROR [%s] %s (%s)", files[-1], *problem, _layout_fix(problem[0]))
     return profile
+
+
+def _layout_fix(code: str) -> str:
+    if code == "baseline-side":
+        return "`s2r profile convert --swap` exchanges the two cameras"
+    return "check the file's R and T: the cameras must sit side by side"
+
+
+def check_layout(profile: StereoProfile, path: str | Path, *, allow_bad_baseline: bool = False) -> None:
+    """Refuse a pair that lint calls a baseline error (:func:`s2r.geometry.baseline_layout_problem`: the "right"
+    camera on the left, or the baseline along the optical axis), as ``from-urdf`` does; with
+    ``allow_bad_baseline`` it is a warning."""
+    problem = baseline_layout_problem(-profile.R.T @ profile.T)
+    if problem is None:
+        return
+    if allow_bad_baseline:
+        log.warning("%s: ERROR [%s] %s (written anyway: --allow-bad-baseline)", path, *problem)
+        return
+    raise FormatError(f"[{problem[0]}] {problem[1]}", path=path, field="extrinsics",
+                      hint=f"{_layout_fix(problem[0])}; or pass --allow-bad-baseline to write it anyway (from-urdf "
+                      "and s2r lint apply the same rule)")
+
+
+def swap_cameras(profile: StereoProfile) -> StereoProfile:
+    """The profile with its cameras exchanged: the right camera becomes the left one, ``R' = R^T``,
+    ``T' = -R^T T`` (OpenCV convention, metres); per-camera calibration figures follow their camera."""
+    data = profile.model_dump()
+    data["left"], data["right"] = data["right"], data["left"]
+    data["extrinsics"]["rotation"] = profile.R.T.tolist()
+    data["extrinsics"]["translation_m"] = (-profile.R.T @ profile.T).tolist()
+    calibration = data["provenance"].get("calibration")
+    if calibration:
+        for a, b in (("rms_left_px", "rms_right_px"), ("coverage_left", "coverage_right")):
+            calibration[a], calibration[b] = calibration[b], calibration[a]
+    notes = data["provenance"]["notes"]
+    data["provenance"]["notes"] = f"{notes}; left and right exchanged (--swap)" if notes else \
+        "left and right exchanged (--swap)"
+    return StereoProfile.model_validate(data)
 
 
 def warn_implausible_baseline(profile: StereoProfile, path: Path) -> None:

@@ -120,7 +120,11 @@ def _number(value: Any) -> float:
 
 
 def _matrix(fields: dict[str, Any], path: Path, key: str) -> NDArray[np.float64]:
-    """Validate an opencv-matrix's ``rows cols dt data`` and return it as float64 ``rows x cols[ x ch]``."""
+    """Validate an opencv-matrix's ``rows cols dt data`` and return it as float64 ``rows x cols[ x ch]``; an empty
+    ``data`` (a template's placeholder, whatever its rows and cols say) as an empty array, for each reader to judge."""
+    data = fields.get("data", "missing")
+    if data is None or data == [] or (isinstance(data, str) and not data.strip()):
+        return np.zeros((0,), dtype=np.float64)
     for name in ("rows", "cols", "dt", "data"):
         if name not in fields:
             raise FormatError("required field of an opencv-matrix is missing (malformed or truncated OpenCV "
@@ -131,8 +135,6 @@ def _matrix(fields: dict[str, Any], path: Path, key: str) -> NDArray[np.float64]
         raise FormatError(f"unknown element type {str(fields['dt'])[:20]!r} (expected e.g. d, f, i, u, 3d)",
                           path=path, field=f"{key}.dt")
     channels = int(match.group(1) or 1)
-    if fields["data"] is None or fields["data"] == [] or (isinstance(fields["data"], str) and not fields["data"]):
-        return np.zeros((0,), dtype=np.float64)  # a placeholder (ORB-SLAM2 templates): each reader decides
     expected = rows * cols * channels
     if expected > MAX_MATRIX_ELEMENTS:
         raise FormatError(f"matrix of {expected} elements is larger than {MAX_MATRIX_ELEMENTS}", path=path,

@@ -39,7 +39,7 @@ from s2r.formats._common import (
 )
 from s2r.formats.filestorage import read_filestorage
 from s2r.formats.slam_settings import flavour_of, load_settings
-from s2r.profile import Camera, Distortion, MonoProfile, StereoProfile
+from s2r.profile import MAX_BASELINE_M, Camera, Distortion, MonoProfile, StereoProfile
 from s2r.rectification import stereo_rectification
 
 __all__ = [
@@ -287,6 +287,7 @@ def load_opencv(
     if not (t_scale_m > 0 and np.isfinite(t_scale_m)):
         raise FormatError(f"T scale must be a positive number of metres, got {t_scale_m}", field="--units-m")
     T = T_file * t_scale_m
+    _check_t_units(T, t_scale_m, data.paths[-1])
     return build_stereo(
         name=name or first.stem, left=_camera(data, 1, size), right=_camera(data, 2, size), R=R, T=T,
         path=data.paths[-1], provenance=provenance_for(
@@ -294,6 +295,18 @@ def load_opencv(
             notes="" if t_scale_m == 1.0 else f"T multiplied by {t_scale_m:g} (metres per unit of the file's T)"),
         description=f"imported from OpenCV FileStorage {', '.join(p.name for p in data.paths)}",
     )
+
+
+def _check_t_units(T: FloatArray, t_scale_m: float, path: Path) -> None:
+    """Refuse a baseline beyond :data:`MAX_BASELINE_M` naming the fix: ``--units-m`` (metres per unit of T)."""
+    baseline = float(np.linalg.norm(T))
+    if baseline <= MAX_BASELINE_M:
+        return
+    scaled = "" if t_scale_m == 1.0 else f" (after --units-m {t_scale_m:g})"
+    raise FormatError(f"|T| = {baseline:g} m{scaled} is beyond the {MAX_BASELINE_M:g} m any stereo baseline has: T is "
+                      "not in metres", path=path, field="T",
+                      hint=f"pass --units-m 0.001 if T is in millimetres ({baseline * 0.001:.4g} m), or --units-m "
+                      "SQUARE_M (the board's square size in metres) if it is in chessboard squares")
 
 
 def opencv_to_text(profile: StereoProfile, *, xml: bool = False, rectification: bool = True) -> str:

@@ -83,6 +83,7 @@ class RosCameraInfo:
     ``R`` rotates the camera's optical frame into the rectified frame; ``P = K' [I | t]`` projects
     rectified-frame points (metres) to rectified pixels; a rectified right camera has ``P[0, 3] = -fx' B``.
     ``s2r`` holds what camera_info cannot say (``convention``, ``matcher``, ``frame_id``, ``zero_distortion``).
+    ``rectified`` is False for a file with neither R nor P (one camera's intrinsics: R = I, P = [K | 0] stand in).
     """
 
     camera_name: str
@@ -95,6 +96,7 @@ class RosCameraInfo:
     P: FloatArray
     frame_id: str = ""
     s2r: dict[str, Any] = field(default_factory=dict)
+    rectified: bool = True
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -200,8 +202,13 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
     if extra.get("zero_distortion") is True and coeffs and coeffs[-1] == ZERO_DISTORTION_MARKER:
         coeffs[-1] = 0.0  # the marker s2r wrote so image_proc rectifies: the camera has no distortion
     distortion = distortion_for(model, coeffs, source, keys["D"])
-    R = rotation_as_printed(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"], zero_is_identity=True)
-    P = _matrix_field(data, keys["P"], (3, 4), source)
+    rectified = keys["R"] in data or keys["P"] in data  # neither: one camera's intrinsics (lint needs no more)
+    if rectified:
+        R = rotation_as_printed(_matrix_field(data, keys["R"], (3, 3), source), source, keys["R"],
+                                zero_is_identity=True)
+        P = _matrix_field(data, keys["P"], (3, 4), source)
+    else:
+        R, P = np.eye(3), np.c_[K, np.zeros(3)]
     build_camera(K=K, size=(width, height), distortion=distortion, path=source, field=keys["K"])
     header = data.get("header")
     frame_id = header.get("frame_id", "") if isinstance(header, dict) else extra.get("frame_id", "")
@@ -209,7 +216,7 @@ def read_camera_info(path: str | Path) -> RosCameraInfo:
     return RosCameraInfo(
         camera_name=name if isinstance(name, str) else str(name), width=width, height=height, K=K,
         D=np.array(distortion.coefficients, dtype=np.float64), distortion_model=model, R=R, P=P,
-        frame_id=frame_id if isinstance(frame_id, str) else str(frame_id), s2r=extra,
+        frame_id=frame_id if isinstance(frame_id, str) else str(frame_id), s2r=extra, rectified=rectified,
     )
 
 
@@ -265,6 +272,12 @@ def load_ros_pair(
     """
     lpath, rpath = Path(left_path), Path(right_path)
     left, right = read_camera_info(lpath), read_camera_info(rpath)
+    for info, path in ((left, lpath), (right, rpath)):
+        if not info.rectified:
+            raise FormatError("holds one camera's intrinsics but no stereo extrinsics (no rectification_matrix, no "
+                              "projection_matrix)", path=path, field="rectification_matrix",
+                              hint="a stereo profile needs the pair's rectified camera_info (R and P, as "
+                              "camera_calibration writes them) or a stereo calibration file (OpenCV R T, Kalibr)")
     if left.image_size != right.image_size:
         raise FormatError(
             f"image size {right.width}x{right.height} differs from {left.width}x{left.height} in {lpath}",

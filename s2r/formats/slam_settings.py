@@ -242,6 +242,19 @@ def _agree(a: _Block, b: _Block) -> bool:
     return a.size == b.size and abs(a.fx - b.fx) <= 1e-3 * b.fx and abs(a.bf - b.bf) <= 1e-3 * abs(b.bf)
 
 
+def _check_without_bf(nodes: Nodes, path: Path, hint: tuple[int, int] | None, pair: _Block) -> None:
+    """Refuse LEFT/RIGHT blocks whose size or fx' disagree with a ``Camera.*`` block that has no ``Camera.bf``:
+    neither reading is then complete and consistent."""
+    if "Camera.fx" not in nodes:
+        return
+    fx, size = _num(nodes, "Camera.fx", path), _size(nodes, "Camera.width", "Camera.height", path, hint)
+    if size != pair.size or abs(fx - pair.fx) > 1e-3 * pair.fx:
+        raise FormatError(f"the LEFT/RIGHT blocks ({pair.describe()}) disagree with Camera.* ({size[0]}x{size[1]}, "
+                          f"fx {fx:.6g}), which has no Camera.bf to stand on its own", path=path, field="Camera.bf",
+                          hint="fix or delete the LEFT/RIGHT blocks (leftovers of another camera?) and give "
+                          "Camera.bf = fx * baseline")
+
+
 def _attempt(read: Callable[[], _Block]) -> tuple[_Block | None, FormatError | None]:
     try:
         return read(), None
@@ -258,6 +271,8 @@ def _orbslam2(nodes: Nodes, path: Path, hint: tuple[int, int] | None) -> tuple[C
     state = _leftright_state(nodes)
     pair, pair_error = _attempt(lambda: _leftright(nodes, path)) if state == "filled" else (None, None)
     block, block_error = _attempt(lambda: _camera_bf(nodes, path, hint)) if "Camera.bf" in nodes else (None, None)
+    if pair is not None and "Camera.bf" not in nodes:
+        _check_without_bf(nodes, path, hint, pair)
     if pair is not None and (block is None or _agree(pair, block)):
         if block_error is not None:
             log.warning("%s: Camera.* is incomplete (%s: %s); using the LEFT/RIGHT blocks (%s)", path,

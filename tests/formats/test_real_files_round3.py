@@ -124,3 +124,12 @@ def test_orbslam2_half_filled_leftright_with_camera_block(caplog: pytest.LogCapt
         p = load_any(path)
     assert p.baseline_m == pytest.approx(0.05, abs=1e-12)
     assert "the LEFT/RIGHT blocks are unusable (LEFT.width: expected a number" in caplog.text
+
+
+def test_orbslam2_leftovers_without_camera_bf_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "no_bf.yaml"
+    path.write_text((FIX / "orbslam2_leftover_euroc.yaml").read_text().replace("Camera.bf: 64.428\n", ""))
+    assert main(["profile", "convert", str(path), "--to", "s2r", "-o", str(tmp_path / "p.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "Camera.bf: the LEFT/RIGHT blocks (752x480, fx 435.205" in err and "(1280x720, fx 859.04)" in err
+    assert err.count("\n") == 1

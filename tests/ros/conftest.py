@@ -8,6 +8,7 @@ selected with ``-m ros``, so ``make test`` stays quick and green on a machine wi
 from __future__ import annotations
 
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -28,7 +29,7 @@ REQUIRED_MODULES = "rospy, rosbag, image_geometry, camera_calibration_parsers, s
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    if "ros" in (config.getoption("markexpr") or ""):
+    if re.search(r"(?<![\w-])ros(?![\w-])", config.getoption("markexpr") or ""):
         return
     skip = pytest.mark.skip(reason="ROS consumer tests run with `make test-ros` (pytest -m ros)")
     for item in items:
