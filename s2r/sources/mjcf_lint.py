@@ -7,6 +7,8 @@ Rules (code: severity), besides the shared geometry rules (``baseline-axis``, ``
 - ``pair-fov`` (warning): the two cameras differ in focal lengths or principal point (their fields differ).
 - ``mjcf-camera`` (warning): a camera whose pose moves with the simulation state (mode track, trackcom,
   targetbody) or whose size is the offscreen buffer's (no ``resolution``).
+- ``pixel-aspect`` (warning): fx and fy differ by more than 1 %: real pixels are square, and a ``sensorsize``
+  whose aspect is not the ``resolution``'s stretches the image (the usual cause).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ __all__ = ["MjcfFinding", "mjcf_pair_findings", "mjcf_placement"]
 #: (severity, code, message, fix, line)
 MjcfFinding = tuple[str, str, str, str, "int | None"]
 _REL_TOL = 1e-6
+_ASPECT_TOL = 0.01
 
 
 def _num(value: float) -> str:
@@ -62,6 +65,12 @@ def mjcf_pair_findings(pair: StereoPair) -> list[MjcfFinding]:
                           f"{_field(right)}", "give both cameras the same fovy (or sensorsize, focal and principal), "
                           "e.g. through one <default> class", line))
     for camera in (left, right):
+        fx, fy, _, _ = _intrinsics(camera)
+        if abs(fx / fy - 1.0) > _ASPECT_TOL:
+            found.append(("warning", "pixel-aspect", f"camera {camera.name!r}: fx {fx:.3f} and fy {fy:.3f} px differ "
+                          f"by {100 * abs(fx / fy - 1):.1f} %: its pixels are not square ({camera.intrinsics_form})",
+                          "make sensorsize's aspect the resolution's (and focal equal in x and y), unless the real "
+                          "camera's calibration says otherwise", camera.lines.get("camera")))
         for remark in camera.remarks:
             found.append(("warning", "mjcf-camera", f"camera {camera.name!r}: {remark}",
                           "use mode='fixed' and a resolution for a stereo camera", camera.lines.get("camera")))

@@ -112,6 +112,19 @@ SCENES = [
         <camera name="left" pos="0 0.04 0" xyaxes="0 -1 0 0 0 1" fovy="55" resolution="960 540"/></frame>
         <camera name="right" pos="0 -0.04 0" quat="0.49875 0.5 -0.5 -0.50125" fovy="55" resolution="960 540"/>
       </frame></frame></worldbody></mujoco>'''),
+    Scene("menagerie_layout_two_worldbodies", '''<mujoco model="scene"><include file="robot.xml"/>
+      <statistic center="0 0 0.1" extent="0.6"/>
+      <worldbody><light pos="0 0 1"/><geom name="floor" size="0 0 0.05" type="plane"/>
+        <body name="stand2" pos="0.4 0 0.3" euler="0 0 3.14159265"><camera name="right" class="eye" pos="0 -0.03 0"/>
+        </body></worldbody></mujoco>''', includes={"robot.xml": '''<mujoco model="robot">
+        <compiler angle="radian" autolimits="true"/><option timestep="0.005"/>
+        <default><default class="robot"><joint damping="1"/>
+          <default class="eye"><camera fovy="40" resolution="1280 800" xyaxes="0 -1 0 0 0 1"/></default></default>
+        </default>
+        <asset><material name="m" rgba="1 1 1 1"/></asset>
+        <worldbody><body name="stand" pos="0.4 0 0.3" euler="0 0 3.14159265">
+          <camera name="left" class="eye" pos="0 0.03 0"/></body></worldbody>
+        <sensor><framepos name="p" objtype="body" objname="stand"/></sensor></mujoco>'''}),
     Scene("cameras_on_separate_bodies", '''<mujoco><worldbody>
       <body name="bar" pos="0 0 1" axisangle="0 0 1 15">
         <body name="lmount" pos="0 0.06 0" quat="1 0 0 0.01"><camera name="left" quat="0.5 0.5 -0.5 -0.5" fovy="60"

@@ -67,6 +67,17 @@ def test_pair_rules(tmp_path: Path) -> None:
     assert _codes(_write(tmp_path, _scene(left, right))) == {"pair-fov": "warning"}
 
 
+def test_stretched_pixels(tmp_path: Path) -> None:
+    """A 16:9 sensor behind a 4:3 image (a wrist camera's frustum rendered into a 640x480 buffer) stretches it."""
+    cams = 'sensorsize="0.00576 0.00324" focal="0.0036 0.0036"'
+    path = _write(tmp_path, _scene(_L.replace('fovy="60"', cams), _R.replace('fovy="60"', cams)))
+    findings = [f for f in lint_description(path) if f.code == "pixel-aspect"]
+    assert len(findings) == 2 and "fx 400.000 and fy 533.333 px differ by 25.0 %" in findings[0].message
+    square = _write(tmp_path, _scene(_L.replace('640 480', '1280 720').replace('fovy="60"', cams),
+                                     _R.replace('640 480', '1280 720').replace('fovy="60"', cams)))
+    assert lint_description(square) == []
+
+
 def test_modes_offscreen_and_joints(tmp_path: Path) -> None:
     left = _L + ' mode="track"'
     right = _R.replace(' resolution="640 480"', "")

@@ -120,3 +120,18 @@ def test_so101_wrist_camera_by_hand(tmp_path: Path) -> None:
     camera = load_description(path).cameras[0]
     assert camera.lens is not None and (camera.lens.fx, camera.lens.fy) == pytest.approx((1200.0, 1200.0), rel=1e-12)
     assert (camera.lens.cx - 0.5, camera.lens.cy - 0.5) == pytest.approx((959.5, 539.5), rel=1e-12)
+
+
+def test_aloha_keyframe_moves_the_wrist_cameras_as_mujoco(tmp_path: Path) -> None:
+    """Joint axes from the arm's classes (childclass vx300s, class waist / forearm_roll): a keyframe with every joint
+    turned places both wrist cameras where MuJoCo does."""
+    qpos = "0.3 -0.5 0.8 0.2 -0.7 1.1 -0.2 0.4 -0.6 0.1 0.9 -1.3"
+    path = tmp_path / "aloha.xml"
+    path.write_text(ALOHA.replace("</mujoco>", f'<keyframe><key name="reach" qpos="{qpos}"/></keyframe></mujoco>'),
+                    encoding="utf-8")
+    description = load_description(path, keyframe="reach")
+    tree = KinematicTree(description)
+    for spec in description.cameras:
+        truth = camera_truth(path, spec.name, keyframe=0)
+        T_root_link, _ = tree.pose_in_root(spec.link)
+        np.testing.assert_allclose(T_root_link @ optical_pose(spec), truth.T_world_optical, atol=1e-6)
