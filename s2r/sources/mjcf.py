@@ -224,7 +224,7 @@ def parse_mjcf(doc: XmlDoc, *, keyframe: str | None = None) -> Description:
     if doc.root.tag != "mujoco":
         raise SourceError(f"expected a <mujoco> root element, got <{doc.root.tag}>", path=doc.path,
                           field=f"<{doc.root.tag}>")
-    expand_includes(doc)
+    included = expand_includes(doc)
     tree = _Tree(doc, read_compiler(doc), read_defaults(doc))
     tree.links["world"], tree.world["world"] = doc.line(doc.root), np.eye(4)
     for worldbody in doc.root.findall("worldbody"):
@@ -237,7 +237,7 @@ def parse_mjcf(doc: XmlDoc, *, keyframe: str | None = None) -> Description:
     specs = [_spec(tree, camera, offscreen, clip) for camera in tree.cameras]
     state = "the model's initial state" if keyframe is None else f"keyframe {keyframe}"
     return Description(path=doc.path, kind="mjcf", links=tree.links, joints=tree.joints, cameras=specs,
-                       joint_state=state)
+                       joint_state=state, included_files=included)
 
 
 def _apply_keyframe(tree: _Tree, keyframe: str) -> None:

@@ -115,8 +115,10 @@ def test_include_relative_to_the_scene_then_the_including_file(tmp_path: Path) -
     _write(tmp_path, '<mujoco><camera name="right" pos="0.2 0 0" resolution="64 48"/></mujoco>', "parts/b.xml")
     scene = _write(tmp_path, '<mujoco><worldbody><camera name="left" resolution="64 48"/>'
                    '<include file="parts/a.xml"/></worldbody></mujoco>')
-    pair = stereo_pair(load_description(scene), left="left", right="right")
+    description = load_description(scene)
+    pair = stereo_pair(description, left="left", right="right")
     np.testing.assert_allclose(pair.T_left_right[:3, 3], [0.2, 0, 0], atol=1e-12)
+    assert [p.name for p in description.included_files] == ["a.xml", "b.xml"]  # in the provenance's sources
 
 
 def test_offscreen_size_and_its_remark(tmp_path: Path) -> None:
