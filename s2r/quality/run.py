@@ -157,14 +157,14 @@ def _check_shapes(view: DepthView) -> None:
                          hint="the depth must be registered to the left image's pixel grid (D435: left infrared)")
 
 
-def _log_not_scored(frames: Sequence[FrameQuality]) -> None:
-    """One INFO line per frame not scored, one WARNING line counting them."""
+def _log_not_scored(frames: Sequence[FrameQuality], source: str) -> None:
+    """One INFO line per frame not scored, one WARNING line counting them (naming ``source``)."""
     skipped = [f for f in frames if not f.scored]
     for f in skipped:
         log.info("%s: not scored: %s", f.image, f.not_scored)
     if skipped:
-        log.warning("%d of %d frames not scored (each with its reason in the table): %s", len(skipped), len(frames),
-                    ", ".join(f.image for f in skipped))
+        log.warning("%s: %d of %d frames not scored (each with its reason in the table): %s", source, len(skipped),
+                    len(frames), ", ".join(f.image for f in skipped))
 
 
 def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb: float,
@@ -206,7 +206,7 @@ def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, p
     if not any(f.distance_m is not None for f in frames):
         raise DepthError(f"no {pattern[0]}x{pattern[1]} chessboard found in any of {len(frames)} frames",
                          field="--pattern", hint="check --pattern (INNER corners, e.g. 9x6) and the images")
-    _log_not_scored(frames)
+    _log_not_scored(frames, source)
     temporal = static.noise()
     return QualityResult(profile.name, source, fb_px_m, frames,
                          summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,
@@ -279,7 +279,7 @@ def measure_wall_views(profile: StereoProfile, views: Iterable[DepthView], *, fb
         reason = next(f.not_scored for f in frames if "not a plane" in f.not_scored)
         raise DepthError(f"no frame's region is a plane ({frames[0].image}: {reason})", field="--wall",
                          hint="aim the camera at a flat wall, or pass a smaller --roi")
-    _log_not_scored(frames)
+    _log_not_scored(frames, source)
     temporal = _wall_temporal(frames, stack, distance_m)
     return QualityResult(profile.name, source, fb_px_m, frames,
                          summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,
