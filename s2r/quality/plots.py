@@ -43,6 +43,22 @@ def _theory(ax: Any, name: str, result: QualityResult, distances: np.ndarray) ->
                     label=f"datasheet: within ±{ds[name]:g} % at {ds['distance_m']:g} m")
 
 
+def _caption(name: str, label: str, result: QualityResult) -> str:
+    """The figure's caption, naming its lines (they are drawn in the image only)."""
+    measured = _measured_subpixel(result.frames)
+    lines = []
+    if name == "plane_fit_rms_pct":
+        lines.append(f"theory, Intel's model Z s / (f B) with s = {DEFAULT_SUBPIXEL_PX:g} px"
+                     + ("" if measured is None else f" and with the measured s = {measured:.3g} px"))
+    if name == "subpixel_rms_px":
+        lines.append(f"Intel's typical {DEFAULT_SUBPIXEL_PX:g} px"
+                     + ("" if measured is None else f" and the measured median {measured:.3g} px"))
+    ds = result.datasheet
+    if ds is not None and name in ("z_accuracy_pct", "plane_fit_rms_pct"):
+        lines.append(f"datasheet: < {ds[name]:g} % at {ds['distance_m']:g} m")
+    return f"{label} against distance" + (f"; lines: {'; '.join(lines)}" if lines else "")
+
+
 def metric_figures(result: QualityResult) -> list[tuple[str, str]]:
     """(caption, data URI) of each metric against distance: scored frames as points, not-scored frames marked
     on the axis, with the theory lines (Intel's 0.08 px, the measured sub-pixel value, a RealSense datasheet)."""
@@ -68,7 +84,7 @@ def metric_figures(result: QualityResult) -> list[tuple[str, str]]:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-        out.append((f"{label} against distance", figure_to_data_uri(fig)))
+        out.append((_caption(name, label, result), figure_to_data_uri(fig)))
     return out
 
 
