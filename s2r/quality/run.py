@@ -37,7 +37,8 @@ from s2r.quality.sanity import MAX_TEMPORAL_NOISE_PCT, sane_value
 from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, summarise_bins
 from s2r.quality.temporal import REPEAT_PX, StaticPoses
 
-__all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "measure_board_views", "measure_wall_views"]
+__all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "frame_image", "measure_board_views",
+           "measure_wall_views", "range_problem"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
