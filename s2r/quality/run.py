@@ -161,8 +161,9 @@ def _check_shapes(view: DepthView) -> None:
 def _log_not_scored(frames: Sequence[FrameQuality], source: str) -> None:
     """One INFO line per frame not scored, one WARNING line counting them (naming ``source``)."""
     skipped = [f for f in frames if not f.scored]
-    for f in skipped:
-        log.info("%s: not scored: %s", f.image, f.not_scored)
+    for f in skipped:  # a figure that could not be a measurement is said loudly; the usual reasons quietly
+        level = logging.WARNING if "not a measurement" in f.not_scored else logging.INFO
+        log.log(level, "%s: not scored: %s", f.image, f.not_scored)
     if skipped:
         log.warning("%s: %d of %d frames not scored (each with its reason in the table): %s", source, len(skipped),
                     len(frames), ", ".join(f.image for f in skipped))

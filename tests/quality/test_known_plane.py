@@ -112,8 +112,11 @@ def test_a_figure_that_cannot_be_a_measurement_is_never_printed() -> None:
     wrong = np.full(rays.shape[0], fb / (fb / 1.0 + 2 * period))
     got = frame_quality("wrong", wrong, rays, fb_px_m=fb, truth=Plane((0.0, 0.0, 1.0), 1.0), period_px=period)
     assert not got.scored and got.plane_fit_rms_pct is None and "mismatches dominate" in got.not_scored
-    result = QualityResult("p", "s", fb, [got], [])
-    assert not any("177800" in line for line in quality_lines(result))
+    result = QualityResult("p", "s", fb, [got, absurd], [])  # even a frame built elsewhere is guarded
+    lines = quality_lines(result)
+    figures = [line.split("not scored:")[0] for line in lines]  # the columns before the reason
+    assert not any("1778" in text or "68.67" in text for text in figures)
+    assert any("left11.jpg" in line and "figure not a measurement" in line for line in lines)
 
 
 def _wall(folder: Path, step_m: float) -> Path:
