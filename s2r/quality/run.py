@@ -131,9 +131,10 @@ def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb
     return quality, mask, span
 
 
-def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, float] | None) -> str:
+def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, float] | None, *,
+                  fb_px_m: float | None = None) -> str:
     """Why a board spanning ``span_m`` (nearest, farthest metres) is not inside the matcher's ``visible_m`` (near,
-    far metres), or "".
+    far metres), or ""; with ``fb_px_m`` (f B, px m) the disparity range a too-near board needs is named.
 
     The whole board's depth span counts, not its median distance: a board tilted towards the camera can sit at
     a median inside the range while its near edge needs more disparities than the matcher searches, and
@@ -143,8 +144,9 @@ def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, fl
         return ""
     near, far = visible_m
     if span_m[0] < near:
+        need = "" if fb_px_m is None else f" so the search reaches {int(np.ceil(fb_px_m / span_m[0]))} px"
         return (f"board partly nearer than the matcher sees: its nearest part at {span_m[0]:.3f} m, the matcher "
-                f"from {near:.3f} m (raise num_disparities / lower matcher.min_depth_m)")
+                f"from {near:.3f} m (raise num_disparities{need} / lower matcher.min_depth_m)")
     if span_m[1] > far:
         return (f"board partly beyond the matcher's range: its farthest part at {span_m[1]:.2f} m, the matcher to "
                 f"{far:.1f} m (lower min_disparity / raise matcher.max_depth_m)")
@@ -177,7 +179,7 @@ def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb:
         return FrameQuality(view.name, None, None, None, None, None, 0, 0,
                             not_scored=f"no {pattern[0]}x{pattern[1]} chessboard found"), None
     quality, mask, span = _score_board(view, board, pattern, fb)
-    problem = range_problem(span, visible_m)
+    problem = range_problem(span, visible_m, fb_px_m=fb)
     if problem:
         quality = not_scored(quality, problem)
     group = poses.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m,
