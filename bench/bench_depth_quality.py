@@ -7,12 +7,15 @@ Needs ``../shared/data/opencv_stereo_chessboard`` (README there). The profile is
 beside plain OpenCV is bench_depth.py's subject), so this compares the metrics. Per pair, plain OpenCV = what a
 careful user writes by hand on that depth: ``findChessboardCorners`` + ``cornerSubPix`` on the rectified left
 image, ``solvePnP`` (IPPE, then LM) for the board's plane, the ROI as the filled hull of the outer corners, and
-numpy for Z accuracy (median of (Z - Z_plane) / Z_plane), plane-fit RMS (total least squares plane, residuals along
-the ray, % of distance) and fill rate. s2r = ``measure_board_views`` on ``stereo_views`` (what ``s2r
-depth-quality`` runs), which also refits inside 5 robust sigmas, groups repeated poses and writes notes.
+numpy for Intel's definitions as rs-depth-quality computes them (nearest and farthest 0.5 % of the points by z
+dropped; Z accuracy the median of (Z_fit - Z_plane) / Z_plane; plane-fit RMS the perpendicular distances to a total
+least squares plane, % of distance; sub-pixel RMS f B / Z - f B / Z_fit) and fill rate, with no mismatch handling
+(Intel's tool has none). s2r = ``measure_board_views`` on ``stereo_views`` (what ``s2r depth-quality`` runs), which
+also counts mismatches and leaves them out, and marks frames it cannot score.
 
-Prints per frame the figures of both (they should agree: same definition, s2r's fit is robust), then the time
-per frame of each, alternating runs, as a ratio.
+Prints per frame the figures of both (they agree on frames without mismatches; where the board is matched a
+pattern period off, or lies partly outside the matcher's range, the plain figures explode and s2r's stay
+measurements or say why there are none), then the time per frame of each, alternating runs, as a ratio.
 """
 
 from __future__ import annotations
@@ -68,22 +71,33 @@ def plain_frame(pipe: StereoPipeline, left_path: Path, right_path: Path) -> dict
     truth = offset / (rays @ normal)
     z = depth[ys, xs]
     valid = np.isfinite(z) & (z > 0)
-    points = rays[valid] * z[valid, None]
+    order = np.argsort(z[valid])  # Intel's trim: the nearest and farthest 0.5 % of the points (by z) dropped
+    cut = order.size // 200
+    keep = order[cut:order.size - cut]
+    zk, rk, tk = z[valid][keep], rays[valid][keep], truth[valid][keep]
+    points = rk * zk[:, None]
     centre = points.mean(axis=0)
     n_fit = np.linalg.svd(points - centre, full_matrices=False)[2][-1]
-    fitted = (n_fit @ centre) / (rays[valid] @ n_fit)
+    fitted = (n_fit @ centre) / (rk @ n_fit)
+    fb = pipe.rectification.fx_px * pipe.rectification.baseline_m
     dist = float(np.median(truth))
     return {"distance_m": dist,
-            "z_accuracy_pct": float(np.median((z[valid] - truth[valid]) / truth[valid])) * 100.0,
-            "plane_fit_rms_pct": float(np.sqrt(np.mean(np.square(z[valid] - fitted)))) / dist * 100.0,
+            "z_accuracy_pct": float(np.median((fitted - tk) / tk)) * 100.0,
+            "plane_fit_rms_pct": float(np.sqrt(np.mean(np.square(points @ n_fit - n_fit @ centre)))) / dist * 100.0,
+            "subpixel_rms_px": float(np.sqrt(np.mean(np.square(fb / zk - fb / fitted)))),
             "fill_rate_pct": 100.0 * valid.sum() / valid.size}
+
+
+def _num(value: float | None, width: int, digits: int) -> str:
+    return f"{'-':>{width}}" if value is None else f"{value:{width}.{digits}f}"
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--num-disparities", type=int, default=256)
-    parser.add_argument("--frames", default="06,07,08,11", help="pair numbers of the real set")
+    parser.add_argument("--frames", default="01,02,03,04,05,06,07,08,09,11,12,13,14",
+                        help="pair numbers of the real set")
     args = parser.parse_args()
     if not DATA.is_dir():
         print(f"skipped: {DATA} is absent (see ../shared/data/README.md)")
@@ -91,7 +105,8 @@ def main() -> int:
     pairs = [FramePaths(DATA / f"left{n}.jpg", right=DATA / f"right{n}.jpg") for n in args.frames.split(",")]
     with tempfile.TemporaryDirectory() as tmp:
         profile_path = Path(tmp) / "real.yaml"
-        if s2r_main(["-q", "calibrate", str(DATA), "-o", str(profile_path), "--jobs", "2"]) != 0:
+        if s2r_main(["-q", "calibrate", str(DATA), "--pattern", "9x6", "--square", str(SQUARE_M), "-o",
+                     str(profile_path), "--jobs", "2"]) != 0:
             print("calibration of the real set failed", file=sys.stderr)
             return 1
         profile = load_profile(str(profile_path))
@@ -107,15 +122,16 @@ def main() -> int:
 
     ours, plain = run_s2r(), run_plain()
     print(f"real set, {len(pairs)} pairs, {args.num_disparities} disparities, preset {pipe.preset}")
-    print(f"{'pair':8} {'dist m':>7} | {'Z acc % s2r':>11} {'plain':>7} | {'RMS % s2r':>9} {'plain':>7} | "
-          f"{'fill % s2r':>10} {'plain':>7} | note")
+    print(f"{'pair':8} {'dist m':>7} | {'Z acc % s2r':>11} {'plain':>7} | {'RMS % s2r':>9} {'plain':>9} | "
+          f"{'subpx s2r':>9} {'plain':>8} | {'fill % s2r':>10} {'plain':>6} | {'out %':>5} | not scored")
     for pair, a, b in zip(pairs, ours, plain, strict=True):
         if b is None or a["distance_m"] is None:
-            print(f"{pair.left.stem:8} board not found (s2r: {a['note']!r}, plain: {b is not None})")
+            print(f"{pair.left.stem:8} board not found (s2r: {a['not_scored']!r}, plain: {b is not None})")
             continue
-        print(f"{pair.left.stem:8} {a['distance_m']:7.3f} | {a['z_accuracy_pct']:11.3f} {b['z_accuracy_pct']:7.3f} | "
-              f"{a['plane_fit_rms_pct']:9.3f} {b['plane_fit_rms_pct']:7.3f} | {a['fill_rate_pct']:10.1f} "
-              f"{b['fill_rate_pct']:7.1f} | {a['note']}")
+        print(f"{pair.left.stem:8} {a['distance_m']:7.3f} | {_num(a['z_accuracy_pct'], 11, 3)} "
+              f"{b['z_accuracy_pct']:7.3f} | {_num(a['plane_fit_rms_pct'], 9, 3)} {b['plane_fit_rms_pct']:9.3f} | "
+              f"{_num(a['subpixel_rms_px'], 9, 3)} {b['subpixel_rms_px']:8.3f} | {_num(a['fill_rate_pct'], 10, 1)} "
+              f"{b['fill_rate_pct']:6.1f} | {_num(a['outlier_pct'], 5, 1)} | {a['not_scored']}")
     t_s2r, t_plain = [], []
     for _ in range(args.repeat):
         t0 = time.perf_counter()

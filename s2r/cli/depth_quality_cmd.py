@@ -42,7 +42,8 @@ def register(sub: Any) -> None:
         "inside a chessboard's region, against the board's PnP plane, per frame and per distance bin, as Intel's "
         "camera depth testing methodology defines them. Depth from stereo pairs through the pipeline (--right) or "
         "from the device (--depth: uint16 mm PNG, 0 = no data, or float32 metres .npy, registered to the left "
-        "image). --wall: a flat wall without a board (central ROI).")
+        "image). --wall: a flat wall without a board (central ROI; refused when it is not a plane). Mismatched "
+        "pixels are counted (outliers %) and left out of the RMS figures; a frame that cannot be scored says why.")
     parser.add_argument("profile", metavar="PROFILE", help="profile name or YAML path")
     parser.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
     parser.add_argument("--right", metavar="DIR|GLOB", help="right images: depth through the pipeline")

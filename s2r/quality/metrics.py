@@ -22,8 +22,8 @@ lies half a pattern square or more off the ground-truth plane (a chessboard matc
 beyond a robust band around the plane fitted to the rest. ``outlier_pct`` is their share of the valid pixels.
 
 A frame is scored on its inliers, or not scored with the reason (``FrameQuality.not_scored``): too few valid
-pixels, mismatches dominating, a wall that is not a plane, or (:func:`s2r.quality.sanity.sane`) a figure no
-depth camera can produce, which therefore cannot be a measurement.
+pixels, mismatches dominating, a wall that is not a plane, or a figure no depth camera can produce, which
+therefore cannot be a measurement (:func:`s2r.quality.sanity.insane_reason`).
 """
 
 from __future__ import annotations

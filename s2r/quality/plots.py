@@ -11,6 +11,7 @@ from s2r.htmlreport import figure_to_data_uri
 from s2r.profile import DEFAULT_SUBPIXEL_PX
 from s2r.quality.metrics import FrameQuality
 from s2r.quality.run import FrameImage, QualityResult
+from s2r.quality.sanity import measured
 
 __all__ = ["frame_figure", "metric_figures"]
 
@@ -19,22 +20,22 @@ _METRICS = (("z_accuracy_pct", "Z accuracy %"), ("plane_fit_rms_pct", "plane-fit
 
 
 def _measured_subpixel(frames: list[FrameQuality]) -> float | None:
-    values = [f.subpixel_rms_px for f in frames if f.scored and f.subpixel_rms_px is not None]
+    values = [f.subpixel_rms_px for f in frames if measured(f) and f.subpixel_rms_px is not None]
     return float(np.median(values)) if values else None
 
 
 def _theory(ax: Any, name: str, result: QualityResult, distances: np.ndarray) -> None:
     """Intel's model (0.08 px), the same model with the measured sub-pixel value, the datasheet's figure."""
-    measured = _measured_subpixel(result.frames)
+    subpx = _measured_subpixel(result.frames)
     if name == "plane_fit_rms_pct":
         for s, style, label in ((DEFAULT_SUBPIXEL_PX, "--", f"theory, Intel's {DEFAULT_SUBPIXEL_PX:g} px"),
-                                (measured, ":", f"theory, measured {measured or 0:.3g} px")):
+                                (subpx, ":", f"theory, measured {subpx or 0:.3g} px")):
             if s is not None:
                 ax.plot(distances, 100.0 * distances * s / result.fb_px_m, style, label=label)
     if name == "subpixel_rms_px":
         ax.axhline(DEFAULT_SUBPIXEL_PX, ls="--", color="C1", label=f"Intel's typical {DEFAULT_SUBPIXEL_PX:g} px")
-        if measured is not None:
-            ax.axhline(measured, ls=":", color="C2", label=f"measured median {measured:.3g} px")
+        if subpx is not None:
+            ax.axhline(subpx, ls=":", color="C2", label=f"measured median {subpx:.3g} px")
     ds = result.datasheet
     if ds is not None and name == "plane_fit_rms_pct":
         ax.plot([ds["distance_m"]], [ds[name]], "kv", label=f"datasheet: < {ds[name]:g} % at {ds['distance_m']:g} m")
@@ -43,13 +44,29 @@ def _theory(ax: Any, name: str, result: QualityResult, distances: np.ndarray) ->
                     label=f"datasheet: within ±{ds[name]:g} % at {ds['distance_m']:g} m")
 
 
+def _caption(name: str, label: str, result: QualityResult) -> str:
+    """The figure's caption, naming its lines (they are drawn in the image only)."""
+    subpx = _measured_subpixel(result.frames)
+    lines = []
+    if name == "plane_fit_rms_pct":
+        lines.append(f"theory, Intel's model Z s / (f B) with s = {DEFAULT_SUBPIXEL_PX:g} px"
+                     + ("" if subpx is None else f" and with the measured s = {subpx:.3g} px"))
+    if name == "subpixel_rms_px":
+        lines.append(f"Intel's typical {DEFAULT_SUBPIXEL_PX:g} px"
+                     + ("" if subpx is None else f" and the measured median {subpx:.3g} px"))
+    ds = result.datasheet
+    if ds is not None and name in ("z_accuracy_pct", "plane_fit_rms_pct"):
+        lines.append(f"datasheet: < {ds[name]:g} % at {ds['distance_m']:g} m")
+    return f"{label} against distance" + (f"; lines: {'; '.join(lines)}" if lines else "")
+
+
 def metric_figures(result: QualityResult) -> list[tuple[str, str]]:
     """(caption, data URI) of each metric against distance: scored frames as points, not-scored frames marked
     on the axis, with the theory lines (Intel's 0.08 px, the measured sub-pixel value, a RealSense datasheet)."""
     import matplotlib.pyplot as plt
 
-    scored = [f for f in result.frames if f.scored and f.distance_m is not None]
-    dropped = [float(f.distance_m) for f in result.frames if not f.scored and f.distance_m is not None]
+    scored = [f for f in result.frames if measured(f) and f.distance_m is not None]
+    dropped = [float(f.distance_m) for f in result.frames if not measured(f) and f.distance_m is not None]
     known = [f.distance_m for f in result.frames if f.distance_m is not None]
     if result.datasheet is not None:
         known.append(float(result.datasheet["distance_m"]))
@@ -68,7 +85,7 @@ def metric_figures(result: QualityResult) -> list[tuple[str, str]]:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-        out.append((f"{label} against distance", figure_to_data_uri(fig)))
+        out.append((_caption(name, label, result), figure_to_data_uri(fig)))
     return out
 
 

@@ -7,8 +7,9 @@ from pathlib import Path
 
 from s2r.errors import terminal_safe
 from s2r.htmlreport import ReportSection, html_table, write_report
-from s2r.quality.metrics import FrameQuality
+from s2r.quality.metrics import FrameQuality, not_scored
 from s2r.quality.run import QualityResult
+from s2r.quality.sanity import insane_reason
 from s2r.quality.summary import BinQuality, QualityVerdict, quality_verdict
 
 __all__ = ["BIN_HEADERS", "FRAME_HEADERS", "bin_rows", "frame_rows", "quality_lines", "quality_sections",
@@ -25,8 +26,16 @@ def _f(value: float | None, digits: int = 2) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
 
 
+def _guarded(frame: FrameQuality) -> FrameQuality:
+    """The last guard before printing: a frame whose figures cannot be measurements is shown not scored."""
+    reason = insane_reason(frame)
+    return not_scored(frame, f"figure not a measurement: {reason}") if reason else frame
+
+
 def frame_rows(frames: list[FrameQuality]) -> list[list[str]]:
-    """One row per frame, formatted; a frame not scored says why in its note column."""
+    """One row per frame, formatted; a frame not scored says why in its note column, and a figure that cannot be
+    a measurement (:func:`s2r.quality.sanity.insane_reason`) is never printed as one."""
+    frames = [_guarded(f) for f in frames]
     return [[f.image, _f(f.distance_m, 3), _f(f.z_accuracy_pct), _f(f.plane_fit_rms_pct), _f(f.subpixel_rms_px, 3),
              _f(f.fill_rate_pct, 1), _f(f.outlier_pct, 1), "yes" if f.scored else "NO",
              "; ".join(filter(None, [f"not scored: {f.not_scored}" if f.not_scored else "", f.note]))]

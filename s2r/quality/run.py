@@ -37,7 +37,8 @@ from s2r.quality.sanity import MAX_TEMPORAL_NOISE_PCT, sane_value
 from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, summarise_bins
 from s2r.quality.temporal import REPEAT_PX, StaticPoses
 
-__all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "measure_board_views", "measure_wall_views"]
+__all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "frame_image", "measure_board_views",
+           "measure_wall_views", "range_problem"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -130,9 +131,10 @@ def _score_board(view: DepthView, board: BoardView, pattern: tuple[int, int], fb
     return quality, mask, span
 
 
-def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, float] | None) -> str:
+def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, float] | None, *,
+                  fb_px_m: float | None = None) -> str:
     """Why a board spanning ``span_m`` (nearest, farthest metres) is not inside the matcher's ``visible_m`` (near,
-    far metres), or "".
+    far metres), or ""; with ``fb_px_m`` (f B, px m) the disparity range a too-near board needs is named.
 
     The whole board's depth span counts, not its median distance: a board tilted towards the camera can sit at
     a median inside the range while its near edge needs more disparities than the matcher searches, and
@@ -142,8 +144,9 @@ def range_problem(span_m: tuple[float, float] | None, visible_m: tuple[float, fl
         return ""
     near, far = visible_m
     if span_m[0] < near:
+        need = "" if fb_px_m is None else f" so the search reaches {int(np.ceil(fb_px_m / span_m[0]))} px"
         return (f"board partly nearer than the matcher sees: its nearest part at {span_m[0]:.3f} m, the matcher "
-                f"from {near:.3f} m (raise num_disparities / lower matcher.min_depth_m)")
+                f"from {near:.3f} m (raise num_disparities{need} / lower matcher.min_depth_m)")
     if span_m[1] > far:
         return (f"board partly beyond the matcher's range: its farthest part at {span_m[1]:.2f} m, the matcher to "
                 f"{far:.1f} m (lower min_disparity / raise matcher.max_depth_m)")
@@ -157,14 +160,15 @@ def _check_shapes(view: DepthView) -> None:
                          hint="the depth must be registered to the left image's pixel grid (D435: left infrared)")
 
 
-def _log_not_scored(frames: Sequence[FrameQuality]) -> None:
-    """One INFO line per frame not scored, one WARNING line counting them."""
+def _log_not_scored(frames: Sequence[FrameQuality], source: str) -> None:
+    """One INFO line per frame not scored, one WARNING line counting them (naming ``source``)."""
     skipped = [f for f in frames if not f.scored]
-    for f in skipped:
-        log.info("%s: not scored: %s", f.image, f.not_scored)
+    for f in skipped:  # a figure that could not be a measurement is said loudly; the usual reasons quietly
+        level = logging.WARNING if "not a measurement" in f.not_scored else logging.INFO
+        log.log(level, "%s: not scored: %s", f.image, f.not_scored)
     if skipped:
-        log.warning("%d of %d frames not scored (each with its reason in the table): %s", len(skipped), len(frames),
-                    ", ".join(f.image for f in skipped))
+        log.warning("%s: %d of %d frames not scored (each with its reason in the table): %s", source, len(skipped),
+                    len(frames), ", ".join(f.image for f in skipped))
 
 
 def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb: float,
@@ -175,7 +179,7 @@ def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb:
         return FrameQuality(view.name, None, None, None, None, None, 0, 0,
                             not_scored=f"no {pattern[0]}x{pattern[1]} chessboard found"), None
     quality, mask, span = _score_board(view, board, pattern, fb)
-    problem = range_problem(span, visible_m)
+    problem = range_problem(span, visible_m, fb_px_m=fb)
     if problem:
         quality = not_scored(quality, problem)
     group = poses.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m,
@@ -206,7 +210,7 @@ def measure_board_views(profile: StereoProfile, views: Iterable[DepthView], *, p
     if not any(f.distance_m is not None for f in frames):
         raise DepthError(f"no {pattern[0]}x{pattern[1]} chessboard found in any of {len(frames)} frames",
                          field="--pattern", hint="check --pattern (INNER corners, e.g. 9x6) and the images")
-    _log_not_scored(frames)
+    _log_not_scored(frames, source)
     temporal = static.noise()
     return QualityResult(profile.name, source, fb_px_m, frames,
                          summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,
@@ -279,7 +283,7 @@ def measure_wall_views(profile: StereoProfile, views: Iterable[DepthView], *, fb
         reason = next(f.not_scored for f in frames if "not a plane" in f.not_scored)
         raise DepthError(f"no frame's region is a plane ({frames[0].image}: {reason})", field="--wall",
                          hint="aim the camera at a flat wall, or pass a smaller --roi")
-    _log_not_scored(frames)
+    _log_not_scored(frames, source)
     temporal = _wall_temporal(frames, stack, distance_m)
     return QualityResult(profile.name, source, fb_px_m, frames,
                          summarise_bins(frames, fb_px_m=fb_px_m, bins=bins,

@@ -14,7 +14,7 @@ if TYPE_CHECKING:
     from s2r.quality.metrics import FrameQuality
 
 __all__ = ["MAX_PLANE_FIT_RMS_PCT", "MAX_SUBPIXEL_RMS_PX", "MAX_TEMPORAL_NOISE_PCT", "MAX_Z_ACCURACY_PCT",
-           "insane_reason", "sane_value"]
+           "insane_reason", "measured", "sane_value"]
 
 #: Plane-fit RMS above this share of the distance (%) is no measurement of noise.
 MAX_PLANE_FIT_RMS_PCT = 25.0
@@ -51,3 +51,8 @@ def insane_reason(quality: FrameQuality) -> str:
     if quality.distance_m is not None and not (math.isfinite(quality.distance_m) and quality.distance_m > 0):
         problems.append(f"distance would read {quality.distance_m} m")
     return "; ".join(problems)
+
+
+def measured(quality: FrameQuality) -> bool:
+    """True when ``quality`` is scored and every figure of it can be a measurement: what summaries may use."""
+    return quality.scored and not insane_reason(quality)

@@ -132,7 +132,7 @@ def _stereo_frames(source: RecordingSource) -> list[tuple[Path, Path]]:
     from s2r.quality.inputs import IMAGE_SUFFIXES, list_files
 
     if source.left is None:
-        from s2r.calib.inputs import find_stereo_pairs
+        from s2r.calib import find_stereo_pairs  # the package namespace: stable across the calib layout
 
         pairs = find_stereo_pairs(Path(str(source.folder)))
         return list(zip(pairs.left, pairs.right, strict=True))

@@ -11,6 +11,7 @@ import numpy as np
 
 from s2r.profile import DEFAULT_SUBPIXEL_PX, StereoProfile
 from s2r.quality.metrics import FrameQuality
+from s2r.quality.sanity import measured
 
 __all__ = ["DEFAULT_BINS_M", "BinQuality", "QualityVerdict", "datasheet_figures", "quality_verdict", "summarise_bins"]
 
@@ -61,7 +62,7 @@ def summarise_bins(frames: Sequence[FrameQuality], *, fb_px_m: float,
     out = []
     for lo, hi in bins:
         near = [f for f in frames if f.distance_m is not None and lo <= f.distance_m < hi]
-        inside = [f for f in near if f.scored]
+        inside = [f for f in near if measured(f)]
         if not inside:
             if near:
                 out.append(BinQuality(lo, hi, 0, _median([f.distance_m for f in near]), None, None, None, None, None,
@@ -104,8 +105,8 @@ class QualityVerdict:
 def _not_scored_reasons(frames: Sequence[FrameQuality]) -> list[str]:
     counts: dict[str, int] = {}
     for f in frames:
-        if not f.scored:
-            key = f.not_scored.split(":")[0].split(" (")[0]
+        if not measured(f):
+            key = (f.not_scored or "figure not a measurement").split(":")[0].split(" (")[0]
             counts[key] = counts.get(key, 0) + 1
     return [f"{n} frame(s): {why}" for why, n in sorted(counts.items(), key=lambda kv: -kv[1])]
 
@@ -113,7 +114,7 @@ def _not_scored_reasons(frames: Sequence[FrameQuality]) -> list[str]:
 def quality_verdict(frames: Sequence[FrameQuality], datasheet: dict[str, Any] | None = None) -> QualityVerdict:
     """"poor" when no frame is scored or the median Z accuracy exceeds the datasheet's limit (2 % without one);
     "check" when some frames are not scored or mismatches exceed 5 % of a scored frame; else "good"."""
-    scored = [f for f in frames if f.scored]
+    scored = [f for f in frames if measured(f)]
     if not scored:
         return QualityVerdict("poor", f"no frame of {len(frames)} could be scored", tuple(_not_scored_reasons(frames)))
     limit = float(datasheet["z_accuracy_pct"]) if datasheet else 2.0

@@ -18,6 +18,7 @@ import numpy as np
 
 from s2r.quality.metrics import FrameQuality
 from s2r.quality.run import QualityResult
+from s2r.quality.sanity import measured
 from s2r.quality.summary import DEFAULT_BINS_M
 from s2r.validate.tolerances import Tolerances
 
@@ -90,7 +91,7 @@ def _metric(real: Sequence[FrameQuality], sim: Sequence[FrameQuality], metric: s
 
 def _in_bin(result: QualityResult, lo: float, hi: float) -> tuple[list[FrameQuality], int]:
     inside = [f for f in result.frames if f.distance_m is not None and lo <= f.distance_m < hi]
-    scored = [f for f in inside if f.scored]
+    scored = [f for f in inside if measured(f)]
     return scored, len(inside) - len(scored)
 
 

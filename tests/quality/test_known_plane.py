@@ -5,6 +5,7 @@ scored must say why instead of printing a figure."""
 
 from __future__ import annotations
 
+import html
 import json
 from pathlib import Path
 from typing import Any
@@ -111,8 +112,11 @@ def test_a_figure_that_cannot_be_a_measurement_is_never_printed() -> None:
     wrong = np.full(rays.shape[0], fb / (fb / 1.0 + 2 * period))
     got = frame_quality("wrong", wrong, rays, fb_px_m=fb, truth=Plane((0.0, 0.0, 1.0), 1.0), period_px=period)
     assert not got.scored and got.plane_fit_rms_pct is None and "mismatches dominate" in got.not_scored
-    result = QualityResult("p", "s", fb, [got], [])
-    assert not any("177800" in line for line in quality_lines(result))
+    result = QualityResult("p", "s", fb, [got, absurd], [])  # even a frame built elsewhere is guarded
+    lines = quality_lines(result)
+    figures = [line.split("not scored:")[0] for line in lines]  # the columns before the reason
+    assert not any("1778" in text or "68.67" in text for text in figures)
+    assert any("left11.jpg" in line and "figure not a measurement" in line for line in lines)
 
 
 def _wall(folder: Path, step_m: float) -> Path:
@@ -136,3 +140,20 @@ def test_wall_mode_refuses_a_region_that_is_not_a_plane(tmp_path: Path, capsys: 
     assert main(["-q", "depth-quality", PROFILE, "--depth", str(step), "--wall", "--json"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "not a plane" in err and err.count("\n") == 1
+
+
+def test_html_page_has_verdict_plots_and_frames(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cam, rng = _camera(), np.random.default_rng(14)
+    frames = [render(cam, (9, 6), 0.08, d, 10, 5, sigma_d_px=SIGMA_D, mismatch_share=mis, hole_share=0.1, bias=0.0,
+                     rng=rng, supersample=2) for d, mis in ((0.8, 0.05), (1.6, 0.7))]
+    left, depth = _write(tmp_path / "rec", frames)
+    assert main(["-q", "depth-quality", PROFILE, "--left", str(left), "--depth", str(depth), "--pattern", "9x6",
+                 "--square", "0.08", "--report", str(tmp_path / "rep")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("depth quality of realsense_d435_848x480 (device depth): CHECK: 1/2 frames scored")
+    page = html.unescape((tmp_path / "rep" / "depth_quality.html").read_text())
+    assert page.index("CHECK: 1/2 frames scored") < page.index("Metrics against distance") < page.index("Frames:")
+    assert page.count("data:image/png;base64,") == 5 + 2  # five metrics against distance, two frames
+    for text in ("theory, Intel's model", "datasheet: < 2 % at 2 m", "mismatches dominate",
+                 "region of interest (red) and depth"):
+        assert text in page or text in out, text

@@ -132,3 +132,28 @@ def test_cli_both_recordings(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert not [c for c in data["checks"] if c["section"] == "recording" and not c["passed"]]
     assert code in (0, 1)  # the rendered stages judge the rig itself; the recordings agree
     assert "Recording: sim vs real" in (tmp_path / "rep" / "validation.html").read_text()
+
+
+def test_device_depth_real_side_with_the_sim_rendered_at_its_poses(tmp_path: Path) -> None:
+    from s2r.validate.recording import compare_recording
+
+    rig = make_rig(name="small_rig", width=320, height=240, baseline_m=0.06)
+    K = rig.left.K
+    cam = Camera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]), 320, 240, 0.06)
+    rng = np.random.default_rng(6)
+    (tmp_path / "left").mkdir()
+    (tmp_path / "depth").mkdir()
+    truth = []
+    for i, (d, yaw) in enumerate([(0.5, 15), (0.6, -10)]):
+        f = render(cam, (9, 6), 0.03, d, yaw, 5, sigma_d_px=0.1, mismatch_share=0.0, hole_share=0.1, bias=0.0,
+                   rng=rng, supersample=2)
+        write_png16(str(tmp_path / "left" / f"{i:03d}.png"), f.left)
+        write_png16(str(tmp_path / "depth" / f"{i:03d}.png"), f.depth_mm)
+        truth.append(float(np.median(f.truth_m[f.roi])))
+    comparison = compare_recording(rig, rig, tmp_path, pattern=(9, 6), square_m=0.03, preset="profile",
+                                   tol=Tolerances())
+    assert comparison.sim_source is None and "device depth" in comparison.real.source
+    real = [f.distance_m for f in comparison.real.frames]
+    sim = [f.distance_m for f in comparison.sim.frames]  # the sim boards sit where the real ones were
+    assert real == pytest.approx(truth, rel=0.01) and sim == pytest.approx(truth, rel=0.01)
+    assert all(f.scored for f in comparison.sim.frames)
