@@ -93,10 +93,12 @@ def fit_device_depth(views: Iterable[DepthView], *, pattern: tuple[int, int], sq
 def stereo_depth_frames(frames: Sequence[FrameQuality]) -> list[DepthFrame]:
     """The pipeline depth's per-frame sub-pixel RMS and fill rate (from :mod:`s2r.quality`) as depth frames.
 
-    Frames that :mod:`s2r.quality` flags with a note (too few valid pixels, mismatches, a board outside the
-    matcher's range) measure the matcher's failure, not the sensor, and are left out."""
+    Frames :mod:`s2r.quality` does not score (its ``not_scored`` reason: too few valid pixels, mismatches
+    dominating, a board outside the matcher's range; where the quality module has no such field, any note)
+    measure the matcher's failure, not the sensor, and are left out."""
     return [DepthFrame(f.image, f.distance_m, f.subpixel_rms_px, f.fill_rate_pct, None, None, None)
-            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None and not f.note]
+            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None
+            and not getattr(f, "not_scored", f.note)]
 
 
 def _sigma_line(frames: Sequence[DepthFrame], *, linear: bool) -> tuple[float | None, float]:
