@@ -62,6 +62,23 @@ class SensorModel(_Model):
     source: str = ""
     frames: StrictInt = Field(default=0, ge=0)
 
+    def describe(self) -> str:
+        """One line naming the fitted figures (the ones left out are not named)."""
+        parts = []
+        if self.image_noise_dn is not None:
+            parts.append(f"image noise {self.image_noise_dn:.3g} DN")
+        if self.blur_sigma_px is not None:
+            parts.append(f"blur {self.blur_sigma_px:.3g} px")
+        if self.subpixel_sigma_px is not None:
+            parts.append(f"disparity noise {self.subpixel_sigma_px:.3g} px at 1 m ({self.subpixel_growth_px_per_m:+.3g}"
+                         " px/m)")
+        if self.fill_rate_by_distance:
+            fills = ", ".join(f"{p.fill_rate_pct:.0f} % at {p.distance_m:.2g} m" for p in self.fill_rate_by_distance)
+            parts.append(f"fill {fills}")
+        if self.edge_dropout_px is not None:
+            parts.append(f"edge dropout {self.edge_dropout_px:.3g} px")
+        return "; ".join(parts) or "no figures"
+
     def disparity_sigma_px(self, distance_m: float) -> float:
         """Disparity noise (px) at ``distance_m`` metres (0 without a fitted ``subpixel_sigma_px``)."""
         if self.subpixel_sigma_px is None:

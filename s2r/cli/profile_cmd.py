@@ -180,6 +180,8 @@ def _cmd_show(args: argparse.Namespace) -> int:
     rms = "  ".join(f"{k} {v:.1f}" for k, v in summary["depth_rms_mm"].items())
     print(f"  theoretical depth RMS (mm, s=0.08 px): {rms}")
     print(f"  stays under 2 % depth error up to {summary['depth_2pct_limit_m']:.2f} m")
+    if profile.sensor is not None:
+        print(f"  sensor model: {profile.sensor.describe()}")
     return 0
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, load_profile, parse_pattern, print_json
+from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
 from s2r.fileio import check_output_free
 
@@ -41,7 +42,8 @@ def register(sub: Any) -> None:
     fit.add_argument("--right-topic", help="right image topic in --bag")
     fit.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
     fit.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
-    fit.add_argument("--preset", default="profile", help="matcher preset for stereo pairs (default profile)")
+    fit.add_argument("--preset", default="profile", choices=PRESETS,
+                     help="matcher preset for stereo pairs (default profile)")
     fit.add_argument("--pattern", type=argparse_type(parse_pattern), required=True,
                      help="chessboard INNER corners, e.g. 9x6")
     fit.add_argument("--square", type=float, required=True, help="chessboard square size in metres")

@@ -84,6 +84,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         from s2r.sensor.files import load_sensor_model
 
         sim = sim.model_copy(update={"sensor": load_sensor_model(args.sensor_model)})
+    if sim.sensor is not None and not args.quiet:
+        print(f"sim renders with the sensor model: {sim.sensor.describe()}", file=sys.stderr)
     real = None if args.real is None else load_profile(args.real)
     from s2r.depth.pipeline import check_side_by_side  # OpenCV loads only when a command needs it
 

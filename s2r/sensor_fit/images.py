@@ -4,8 +4,9 @@
   flat board pixel's variance across the frames, averaged over the board, in grey levels. Without repeats, from
   the flat squares: inside each square, away from its edges by three blur sigmas plus two pixels, the residual
   variance about a fitted plane ``a + b x + c y`` (lighting gradients), the median over the squares (chi-square
-  scaled). Squares or pixels touching 0 or 255
-  (clipped) are left out. Rounding to integers adds 1/12 DN^2, which is taken out.
+  scaled). A square touching 0 or 255 (clipped) gives the sigma of a normal distribution censored there
+  (maximum likelihood, a constant level); still frames leave clipped pixels out. Rounding to integers adds
+  1/12 DN^2, which is taken out.
 - Blur, from the board's edges: along every edge between two neighbouring inner corners (its middle 60 %), the
   grey level against the signed distance from the edge line is fitted with ``a + b Phi((d - delta) / s)``; the
   median ``s`` over the edges is the edge spread (see :mod:`s2r.sensor_model`). It includes whatever the pixel's
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import curve_fit
+from scipy.optimize import curve_fit, minimize
 from scipy.special import ndtr
 from scipy.stats import chi2
 
@@ -98,8 +99,35 @@ def temporal_noise_var(images: Sequence[BoardImage], group: Sequence[int]) -> fl
     return float(np.mean(np.var(stack[:, mask], axis=0, ddof=1)))
 
 
+def _censored_var(values: FloatArray) -> float | None:
+    """Noise variance (DN^2) of a flat square whose grey levels are clipped at 0 and/or 255: the maximum-likelihood
+    mean and sigma of a normal distribution censored below 0.5 and above 254.5 (None when fewer than a tenth of the
+    pixels, or 10, are unclipped)."""
+    low, high = values <= 0, values >= 255
+    mid = values[~(low | high)]
+    if mid.size < max(10, values.size // 10):
+        return None
+    n_low, n_high = int(low.sum()), int(high.sum())
+
+    def nll(params: FloatArray) -> float:
+        mu, log_s = float(params[0]), float(params[1])
+        s = math.exp(log_s)
+        total = float(np.sum(0.5 * ((mid - mu) / s) ** 2)) + mid.size * log_s
+        if n_low:
+            total -= n_low * math.log(max(float(ndtr((0.5 - mu) / s)), 1e-300))
+        if n_high:
+            total -= n_high * math.log(max(float(ndtr((mu - 254.5) / s)), 1e-300))
+        return total
+
+    spread = max(1.4826 * float(np.median(np.abs(mid - np.median(mid)))), 0.5)
+    result = minimize(nll, np.array([float(np.median(values)), math.log(spread)]), method="Nelder-Mead",
+                      options={"xatol": 1e-4, "fatol": 1e-6, "maxiter": 400})
+    return math.exp(2.0 * float(result.x[1])) if result.success else None
+
+
 def _square_vars(img: BoardImage, margin_px: float) -> list[tuple[float, int]]:
-    """(residual variance about a plane, dof) of each unclipped square interior."""
+    """(noise variance, dof) of each square interior: the residual variance about a plane, or for a clipped
+    square the censored normal's (:func:`_censored_var`)."""
     grid, grey = img.grid(), img.grey
     out = []
     for r in range(grid.shape[0] - 1):
@@ -115,7 +143,12 @@ def _square_vars(img: BoardImage, margin_px: float) -> list[tuple[float, int]]:
             cv2.fillConvexPoly(mask, np.round(inner * 16).astype(np.int32), 1, lineType=cv2.LINE_8, shift=4)
             ys, xs = np.nonzero(mask)
             values = grey[ys, xs].astype(np.float64)
-            if values.size < _MIN_SQUARE_PIXELS or values.min() <= 0 or values.max() >= 255:
+            if values.size < _MIN_SQUARE_PIXELS:
+                continue
+            if values.min() <= 0 or values.max() >= 255:
+                var = _censored_var(values)
+                if var is not None:
+                    out.append((var, values.size - 2))
                 continue
             design = np.column_stack([np.ones(values.size), xs, ys]).astype(np.float64)
             coef, *_ = np.linalg.lstsq(design, values, rcond=None)
@@ -133,7 +166,7 @@ def image_noise_dn(images: Sequence[BoardImage], *, blur_px: float) -> tuple[flo
     else:
         squares = [s for img in images for s in _square_vars(img, 3.0 * blur_px + 2.0)]
         if not squares:
-            return None, "no unclipped flat square large enough"
+            return None, "no flat square large enough (or all clipped)"
         var = _chi2_scaled_median([v for v, _ in squares], float(np.median([d for _, d in squares])))
         how = f"flat squares, {len(squares)} squares"
     return math.sqrt(max(var - ROUNDING_VAR, 0.0)), how

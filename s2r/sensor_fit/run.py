@@ -35,6 +35,8 @@ __all__ = ["MIN_SPAN_M", "SensorFit", "board_image", "fit_device_depth", "fit_im
 
 #: Smallest spread of board distances (m) over which sigma_d's growth with distance is fitted.
 MIN_SPAN_M = 0.3
+#: Largest disparity noise (px) reported as noise; beyond it the residuals are mismatches (a pattern period off).
+_MAX_SIGMA_PX = 5.0
 
 
 @dataclass
@@ -93,10 +95,12 @@ def fit_device_depth(views: Iterable[DepthView], *, pattern: tuple[int, int], sq
 def stereo_depth_frames(frames: Sequence[FrameQuality]) -> list[DepthFrame]:
     """The pipeline depth's per-frame sub-pixel RMS and fill rate (from :mod:`s2r.quality`) as depth frames.
 
-    Frames that :mod:`s2r.quality` flags with a note (too few valid pixels, mismatches, a board outside the
-    matcher's range) measure the matcher's failure, not the sensor, and are left out."""
+    Frames :mod:`s2r.quality` does not score (its ``not_scored`` reason: too few valid pixels, mismatches
+    dominating, a board outside the matcher's range; where the quality module has no such field, any note)
+    measure the matcher's failure, not the sensor, and are left out."""
     return [DepthFrame(f.image, f.distance_m, f.subpixel_rms_px, f.fill_rate_pct, None, None, None)
-            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None and not f.note]
+            for f in frames if f.distance_m is not None and f.fill_rate_pct is not None
+            and not getattr(f, "not_scored", f.note)]
 
 
 def _sigma_line(frames: Sequence[DepthFrame], *, linear: bool) -> tuple[float | None, float]:
@@ -158,6 +162,9 @@ def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, sour
         notes["subpixel_sigma_px"] = f"{sum(f.sigma_d_px is not None for f in depth)} frames, {near:.2f}-{far:.2f} m"
     if device:
         notes["edge_dropout_px"] = "measured" if band is not None else "no depth edges away from the image border"
+    if sigma is not None and sigma > _MAX_SIGMA_PX:  # mismatches, not noise: no figure rather than a false one
+        notes["subpixel_sigma_px"] = f"{sigma:.3g} px measured: mismatches, not noise; left out"
+        sigma, growth = None, 0.0
     model = SensorModel(image_noise_dn=noise, blur_sigma_px=blur, subpixel_sigma_px=sigma,
                         subpixel_growth_px_per_m=growth, fill_rate_by_distance=_fill_curve(depth),
                         hole_scale_px=holes or 0.0, edge_dropout_px=band, source=source,

@@ -26,7 +26,7 @@ CX, CY = (W - 1) / 2.0, (H - 1) / 2.0
 BASELINE = 0.06
 COLS, ROWS = 9, 6
 SQUARE = 0.04
-DARK, LIGHT, MARGIN_GREY, WALL_GREY = 50.0, 190.0, 190.0, 110.0
+DARK, LIGHT, WALL_GREY = 50.0, 190.0, 110.0
 K = np.array([[F, 0, CX], [0, F, CY], [0, 0, 1.0]])
 
 PROFILE_YAML = f"""schema_version: 1
@@ -57,13 +57,14 @@ def board_pose(distance: float, tilt_x_deg: float, tilt_y_deg: float, shift: tup
     return R, t
 
 
-def _board_grey(bx: np.ndarray, by: np.ndarray) -> np.ndarray:
-    """Grey level at board coordinates (m): squares (one ring beyond the inner corners), margin, then wall."""
+def _board_grey(bx: np.ndarray, by: np.ndarray, levels: tuple[float, float] = (DARK, LIGHT)) -> np.ndarray:
+    """Grey level at board coordinates (m): squares (one ring beyond the inner corners) at ``levels`` (dark,
+    light), the margin as light, then the wall."""
     i, j = np.floor(bx / SQUARE), np.floor(by / SQUARE)
     squares = (i >= -1) & (i <= COLS - 1) & (j >= -1) & (j <= ROWS - 1)
     margin = (bx >= -2 * SQUARE) & (bx < (COLS + 1) * SQUARE) & (by >= -2 * SQUARE) & (by < (ROWS + 1) * SQUARE)
-    grey = np.where(margin, MARGIN_GREY, WALL_GREY)
-    return np.where(squares, np.where((i + j) % 2 == 0, DARK, LIGHT), grey)
+    grey = np.where(margin, levels[1], WALL_GREY)
+    return np.where(squares, np.where((i + j) % 2 == 0, levels[0], levels[1]), grey)
 
 
 def _on_board(bx: np.ndarray, by: np.ndarray) -> np.ndarray:
@@ -82,7 +83,8 @@ def _board_coords(R: np.ndarray, t: np.ndarray, u: np.ndarray, v: np.ndarray, ca
     return local[..., 0], local[..., 1], s
 
 
-def render_image(R: np.ndarray, t: np.ndarray, *, cam_x: float = 0.0, supersample: int = 4) -> np.ndarray:
+def render_image(R: np.ndarray, t: np.ndarray, *, cam_x: float = 0.0, supersample: int = 4,
+                 levels: tuple[float, float] = (DARK, LIGHT)) -> np.ndarray:
     """(H, W) float64 ideal image: the board (and a flat wall around it) area-averaged over each pixel."""
     offsets = (np.arange(supersample) + 0.5) / supersample - 0.5
     acc = np.zeros((H, W))
@@ -90,7 +92,7 @@ def render_image(R: np.ndarray, t: np.ndarray, *, cam_x: float = 0.0, supersampl
     for dy in offsets:
         for dx in offsets:
             bx, by, _ = _board_coords(R, t, u0 + dx, v0 + dy, cam_x)
-            acc += _board_grey(bx, by)
+            acc += _board_grey(bx, by, levels)
     return acc / supersample ** 2
 
 
@@ -125,9 +127,10 @@ class Truth:
         return np.interp(z, xs, ys) / 100.0
 
 
-def stereo_recording(out: Path, truth: Truth, *, poses: list = POSES, still_repeats: int = 0, seed: int = 1
-                     ) -> Path:
-    """Write ``out/left/NN.png`` and ``out/right/NN.png``; ``still_repeats`` extra frames repeat the first pose."""
+def stereo_recording(out: Path, truth: Truth, *, poses: list = POSES, still_repeats: int = 0, seed: int = 1,
+                     levels: tuple[float, float] = (DARK, LIGHT)) -> Path:
+    """Write ``out/left/NN.png`` and ``out/right/NN.png``; ``still_repeats`` extra frames repeat the first pose;
+    ``levels``: the dark and light squares' grey levels (0 and 255: the noise is clipped)."""
     rng = np.random.default_rng(seed)
     (out / "left").mkdir(parents=True)
     (out / "right").mkdir()
@@ -135,7 +138,7 @@ def stereo_recording(out: Path, truth: Truth, *, poses: list = POSES, still_repe
     for k, (dist, tx, ty, shift) in enumerate(frames):
         R, t = board_pose(dist, tx, ty, shift)
         for side, cam_x in (("left", 0.0), ("right", BASELINE)):
-            ideal = render_image(R, t, cam_x=cam_x)
+            ideal = render_image(R, t, cam_x=cam_x, levels=levels)
             cv2.imwrite(str(out / side / f"{k:02d}.png"), camera_image(ideal, blur=truth.blur_px,
                                                                           noise=truth.noise_dn, rng=rng))
     return out

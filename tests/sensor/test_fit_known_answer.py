@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from s2r.cli import main
-from tests.sensor.recordings import Truth, device_recording, stereo_recording, write_profile
+from tests.sensor.recordings import POSES, Truth, device_recording, stereo_recording, write_profile
 
 DEVICE_TRUTH = Truth(sigma_d_px=0.1, sigma_growth_px_per_m=0.03, fill=[(0.5, 97.0), (2.0, 80.0)],
                      edge_band_px=4.0, hole_scale_px=1.0)
@@ -65,6 +65,14 @@ def test_stereo_fit_gives_back_image_noise_and_blur(tmp_path: Path, capsys: pyte
     assert got["blur_sigma_px"] == pytest.approx(STEREO_TRUTH.blur_px, rel=0.2)
     assert got["notes"]["image_noise_dn"].startswith("flat squares")
     assert got["subpixel_sigma_px"] is not None and got["fill_rate_by_distance"]
+
+
+def test_clipped_board_noise(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    truth = Truth(noise_dn=3.0, blur_px=1.0)
+    rec = stereo_recording(tmp_path / "rec", truth, poses=POSES[:3], levels=(0.0, 255.0))
+    got = _fit(capsys, tmp_path, "--left", str(rec / "left"))
+    assert got["image_noise_dn"] == pytest.approx(truth.noise_dn, rel=0.15)  # every square clipped: censored fit
+    assert got["blur_sigma_px"] == pytest.approx(truth.blur_px, rel=0.2)
 
 
 def test_still_frames_give_temporal_noise(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
