@@ -59,7 +59,7 @@ def test_progress_in_a_log_prints_lines_and_a_heartbeat() -> None:
 
 def test_progress_stays_silent_for_a_quick_run_and_when_disabled() -> None:
     quick, off = io.StringIO(), io.StringIO()
-    bar = ProgressBar(stream=quick)  # the first 3 s print nothing: a one-line error stays one line
+    bar = ProgressBar(stream=quick)  # the first 10 s print nothing: a one-line error stays one line
     bar(0, 2, "detect")
     bar(2, 2, "detect")
     ProgressBar(enabled=False, stream=off)(1, 2, "detect")

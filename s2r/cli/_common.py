@@ -103,8 +103,8 @@ class ProgressBar:
     On a terminal it draws ``label [#####-----] done/total``. On anything else (a pipe, a CI log, a file) it
     prints ``progress: label done/total (elapsed s)`` lines: when a stage starts, when it ends, and at least every
     ``log_every_s`` seconds while one runs (a daemon heartbeat thread repeats the last state, so a slow stage
-    between two callbacks still shows it is alive). Nothing is logged in the first 3 s: a quick run (or a
-    one-line error) stays as short as it was.
+    between two callbacks still shows it is alive). Nothing is logged in the first ``log_every_s``: a quick run
+    (or a one-line error, which bad input gives within seconds) stays as short as it was.
     """
 
     def __init__(self, *, enabled: bool | None = None, terminal: bool | None = None, width: int = 30,
@@ -115,7 +115,7 @@ class ProgressBar:
         self.terminal = self.stream.isatty() if terminal is None else terminal
         self.width = width
         self.log_every_s = log_every_s
-        self.quiet_start_s = min(3.0, log_every_s)
+        self.quiet_start_s = log_every_s
         self._last = 0.0
         self._start = time.monotonic()
         self._state: tuple[int, int, str] | None = None

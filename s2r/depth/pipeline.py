@@ -156,7 +156,7 @@ class StereoPipeline:
             raise DepthError(
                 f"images are {size[0]}x{size[1]} but profile {self.profile.name} is {expected[0]}x{expected[1]}",
                 field="image size", hint="pass images of the profile's size, or let s2r rescale "
-                "the intrinsics")
+                "the intrinsics (--resize)")
         sx, sy = size[0] / expected[0], size[1] / expected[1]
         if abs(sx / sy - 1.0) > 0.01:  # another aspect ratio is a crop or another sensor mode, not a rescale
             raise DepthError(

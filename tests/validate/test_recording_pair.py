@@ -98,7 +98,7 @@ def test_recording_sources_are_parsed_and_bad_ones_named(tmp_path: Path, recordi
 
 
 def test_cli_refuses_a_sim_recording_alone(capsys: pytest.CaptureFixture[str], recordings: dict[str, Path]) -> None:
-    assert main(["validate", PROFILE, PROFILE, "--sim-recording", str(recordings["twin"])]) == 2
+    assert main(["validate", PROFILE, PROFILE, "--roles-as-given", "--sim-recording", str(recordings["twin"])]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "--recording" in err and err.count("\n") == 1
 
@@ -121,8 +121,8 @@ def test_cli_both_recordings(tmp_path: Path, capsys: pytest.CaptureFixture[str])
             write_png16(str(folder / "left" / f"{i:03d}.png"), f.left)
             write_png16(str(folder / "depth" / f"{i:03d}.png"), f.depth_mm)
         folders.append(folder)
-    code = main(["-q", "validate", str(path), str(path), "--quick", "--jobs", "1", "--distances", "0.8,1.5",
-                 "--recording", str(folders[0]),
+    code = main(["-q", "validate", str(path), str(path), "--roles-as-given", "--quick", "--jobs", "1",
+                 "--distances", "0.8,1.5", "--recording", str(folders[0]),
                  "--sim-recording", str(folders[1]), "--pattern", "9x6", "--square", "0.03", "--json",
                  "--report", str(tmp_path / "rep")])
     data = json.loads(capsys.readouterr().out)
