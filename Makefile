@@ -9,7 +9,7 @@ STAMP := $(VENV)/.s2r-installed
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[ros,dev]"
+	$(BIN)/python -m pip install --quiet -e ".[ros,dev,mujoco]"
 	touch $(STAMP)
 
 test: $(STAMP) lint typecheck pytest

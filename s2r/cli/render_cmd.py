@@ -1,4 +1,4 @@
-"""``s2r render boards | scene``: synthetic calibration sets and ground-truth depth scenes (PyBullet)."""
+"""``s2r render boards | scene``: synthetic calibration sets and ground-truth depth scenes (PyBullet or MuJoCo)."""
 
 from __future__ import annotations
 
@@ -19,13 +19,16 @@ from s2r.cli._common import (
 from s2r.errors import RenderError
 from s2r.fileio import atomic_write_text
 
-__all__ = ["SCENE_CHOICES", "register"]
+__all__ = ["RENDERER_CHOICES", "SCENE_CHOICES", "add_renderer", "register", "renderer_choice"]
+
+#: Renderer names (equal to ``s2r.render.backend.RENDERERS``; repeated so the CLI starts without pybullet).
+RENDERER_CHOICES = ("pybullet", "mujoco")
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
 SCENE_CHOICES = ("planes", "slanted", "span", "room")
 
 
-def _common(parser: argparse.ArgumentParser) -> None:
+def _common(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> None:
     parser.add_argument("profile", help="profile name or path")
     parser.add_argument("-o", "--output", "--out", dest="out", required=True, metavar="DIR",
                         help="output folder (must be empty unless --force); --out is kept as an alias")
@@ -37,18 +40,42 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
                         help="right camera gain relative to the left (default 1.0)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    add_renderer(parser, scene_alias=scene_alias)
     add_force(parser)
     add_json(parser)
 
 
+def add_renderer(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> None:
+    """Add ``--renderer``, ``--world SCENE.xml`` (``--scene`` too when ``scene_alias``) and ``--world-camera``."""
+    parser.add_argument("--renderer", choices=RENDERER_CHOICES, default="pybullet",
+                        help="pybullet (default: TinyRenderer, flat light) or mujoco (MuJoCo's OpenGL renderer, "
+                             "headless through EGL or OSMesa; pip install 's2r[mujoco]')")
+    names = ["--world", "--scene"] if scene_alias else ["--world"]
+    parser.add_argument(*names, dest="world", type=Path, default=None, metavar="SCENE.xml",
+                        help="with --renderer mujoco: render inside this MJCF world (its lights, materials and "
+                             "objects) with the boards and surfaces inserted")
+    parser.add_argument("--world-camera", default=None, metavar="CAM",
+                        help="with --world: the left camera takes this MJCF camera's pose (default: the world's "
+                             "origin looking along +x, z up)")
+
+
+def renderer_choice(args: argparse.Namespace) -> Any:
+    """The :class:`s2r.render.backend.RendererChoice` of ``--renderer`` / ``--world`` / ``--world-camera``."""
+    from s2r.render.backend import RendererChoice
+
+    world = None if args.world is None else str(args.world)
+    return RendererChoice(args.renderer, world, args.world_camera)
+
+
 def register(sub: Any) -> None:
     """Add ``render boards`` and ``render scene``."""
-    parser = sub.add_parser("render", help="render calibration boards or ground-truth depth scenes (PyBullet)")
+    parser = sub.add_parser("render", help="render calibration boards or ground-truth depth scenes (PyBullet or "
+                                           "MuJoCo)")
     render_sub = parser.add_subparsers(dest="render_command", required=True, metavar="WHAT")
 
     p_boards = render_sub.add_parser("boards", help="a stereo chessboard calibration set with true poses",
                                      description="Writes DIR/left/NN.png, DIR/right/NN.png and DIR/truth.yaml.")
-    _common(p_boards)
+    _common(p_boards, scene_alias=True)
     p_boards.add_argument("--views", type=int, default=20, metavar="N", help="number of views (default 20)")
     p_boards.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6), metavar="COLSxROWS",
                           help="inner corners (default 9x6)")
@@ -87,7 +114,7 @@ def _cmd_boards(args: argparse.Namespace) -> int:
     result = render_board_set(
         profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
         supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
-        right_gain=args.right_gain, target=target, cut_share=args.cut_share,
+        right_gain=args.right_gain, target=target, cut_share=args.cut_share, renderer=renderer_choice(args),
     )
     if args.target is not None:
         atomic_write_text(result.out_dir / "target.yaml", args.target.read_text(encoding="utf-8"), force=True)
@@ -109,6 +136,7 @@ def _cmd_scene(args: argparse.Namespace) -> int:
     frames = render_scene(
         profile, scene=args.scene, distances_m=args.distances, supersample=args.supersample, seed=args.seed,
         noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain,
+        renderer=renderer_choice(args),
     )
     out = write_scene(frames, args.out, force=args.force)
     if args.json:

@@ -53,6 +53,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
                         help="--recording board's inner corners COLSxROWS (default 9x6)")
     parser.add_argument("--square", type=float, default=0.025, help="--recording board's square size, m (0.025)")
+    from s2r.cli.render_cmd import add_renderer
+
+    add_renderer(parser, scene_alias=True)
     add_json(parser)
     add_force(parser)
     parser.set_defaults(func=_cmd_validate)
@@ -76,7 +79,14 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     check_side_by_side(sim, path=args.sim)  # a vertical rig: one line now, not a confusing depth range later
     if real is not None:
         check_side_by_side(real, path=args.real)
-    settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
+    settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset,
+                                   renderer=args.renderer, scene_path=None if args.world is None else str(args.world),
+                                   scene_camera=args.world_camera)
+    if args.renderer != "pybullet" or args.world is not None:
+        from s2r.cli.render_cmd import renderer_choice
+        from s2r.render.backend import check_renderer
+
+        check_renderer(renderer_choice(args), probe_gl=True)  # MuJoCo missing, no GL, a bad world file: one line now
     if args.distances is not None:
         try:
             settings = dataclasses.replace(settings, distances_m=parse_distances(args.distances))

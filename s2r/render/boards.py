@@ -20,6 +20,7 @@ from s2r.errors import RenderError
 from s2r.fileio import atomic_write_text
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
+from s2r.render.backend import RendererChoice, check_renderer, render_workers
 from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import BoardGeometry, sample_board_poses
@@ -113,6 +114,7 @@ def render_board_set(
     square_m: float = 0.025, seed: int = 0, supersample: int = 2, noise_sigma: float = 0.0,
     jobs: int | None = None, force: bool = False, progress: ProgressCallback | None = None,
     right_gain: float = 1.0, target: AnyTarget | None = None, cut_share: float | None = None,
+    renderer: RendererChoice | None = None,
 ) -> BoardSet:
     """Render a stereo calibration set of ``views`` chessboard views through ``profile`` into ``out_dir``.
 
@@ -132,7 +134,10 @@ def render_board_set(
         target: a file-described board (ChArUco, Kalibr AprilGrid or checkerboard) instead of ``pattern``.
         cut_share: share of views moved so the image edge cuts the board (default 0.4 with a ChArUco or
             AprilGrid target, whose corners are identified one by one; 0 otherwise).
+        renderer: the backend that draws (default PyBullet; :mod:`s2r.render.backend`).
     """
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     _check_board(pattern, square_m, views)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
@@ -152,15 +157,18 @@ def render_board_set(
     with tempfile.TemporaryDirectory(prefix="s2r-boards-") as tmp:
         mesh, texture = board_surface(Path(tmp), board, layout)
         jobs_list = [
-            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k)
+            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k,
+                      renderer)
             for k, T in enumerate(poses)
         ]
-        images = run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards")
+        images = run_jobs(render_stereo_images, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                          label="render boards")
     left_paths, right_paths = [], []
     for name, (left, right) in zip(names, images, strict=True):
         left_paths.append(encode_png(out / "left" / f"{name}.png", left))
         right_paths.append(encode_png(out / "right" / f"{name}.png", right))
-    options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain}
+    options = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain,
+               "renderer": renderer.name}
     if layout is not None:
         poses = [T @ layout.T_grid_target for T in poses]  # the truth in the target's own frame
     truth_path = atomic_write_text(out / "truth.yaml", _truth(profile, board, names, poses, options, target, cut),

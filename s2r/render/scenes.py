@@ -24,6 +24,7 @@ from s2r.fileio import atomic_write_npy, atomic_write_text
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
+from s2r.render.backend import RendererChoice, check_renderer, render_workers
 from s2r.render.boards import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
 from s2r.render.outputs import clear_numbered, encode_png, numbered_names
@@ -105,7 +106,7 @@ def _render_frame(job: _SceneJob) -> tuple[NDArray[np.uint8], NDArray[np.uint8],
 def render_scene(
     profile: StereoProfile, *, scene: str = "planes", distances_m: Sequence[float] = (0.5, 1.0, 2.0, 3.0, 5.0),
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
-    progress: ProgressCallback | None = None, right_gain: float = 1.0,
+    progress: ProgressCallback | None = None, right_gain: float = 1.0, renderer: RendererChoice | None = None,
 ) -> list[SceneFrame]:
     """Render ``scene`` ("planes", "slanted", "span" or "room") through ``profile`` with exact ground truth.
 
@@ -114,8 +115,10 @@ def render_scene(
     so its depth grows by ``SPAN_RATIO`` (1.5) across the image width, sampling every sub-pixel phase; "room":
     one frame of a textured box room (back wall 0.5 m beyond the farthest distance) with a textured box at each
     distance. See the module docstring for how the rectified ground truth is computed. ``right_gain`` scales
-    the right image's grey levels.
+    the right image's grey levels; ``renderer`` picks the backend (default PyBullet).
     """
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     near, far = clip_planes(profile)
     distances = check_distances(distances_m, near, far)
@@ -125,15 +128,17 @@ def render_scene(
     with tempfile.TemporaryDirectory(prefix="s2r-scene-") as tmp:
         layouts = scene_layouts(profile, Path(tmp), scene=scene, distances_m=distances, seed=seed)
         jobs_list = [
-            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k),
+            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k, renderer),
                       rect.R1, rect.P1, rect.image_size, rect.fx_px * rect.baseline_m, rect.doffs_px)
             for k, (surfaces, _) in enumerate(layouts)
         ]
-        results = run_jobs(_render_frame, jobs_list, jobs=jobs, progress=progress, label=f"render {scene}")
+        results = run_jobs(_render_frame, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                           label=f"render {scene}")
     frames = []
     for name, (_, desc), (left, right, depth, depth_rect, disp) in zip(numbered_names(len(layouts)), layouts,
                                                                       results, strict=True):
-        description = {**desc, "profile": profile.name, "supersample": supersample, "seed": seed,
+        description = {**desc, "profile": profile.name, "renderer": renderer.name, "supersample": supersample,
+                       "seed": seed,
                        "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info}
         frames.append(SceneFrame(name, left, right, depth, disp, depth_rect, description))
     return frames
@@ -142,19 +147,23 @@ def render_scene(
 def render_boards_at(
     profile: StereoProfile, poses: Sequence[NDArray[np.float64]], *, pattern: tuple[int, int], square_m: float,
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
-    progress: ProgressCallback | None = None,
+    progress: ProgressCallback | None = None, renderer: RendererChoice | None = None,
 ) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
     """Render a chessboard (``pattern`` inner corners, ``square_m`` squares, the calibration boards' margin) at each
     pose ``T_left_board`` (4x4, board frame -> LEFT optical frame, metres; origin at the first inner corner, x along
-    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose."""
+    the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose (drawn by
+    ``renderer``, default PyBullet)."""
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma)
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
     left_setup, right_setup = stereo_setups(profile, supersample=supersample)
     with tempfile.TemporaryDirectory(prefix="s2r-boards-at-") as tmp:
         mesh, texture = board_surface(Path(tmp), board)
         jobs_list = [StereoJob(left_setup, right_setup, (Surface(mesh, texture, np.asarray(T, np.float64)),),
-                               noise_sigma, 1.0, seed, k) for k, T in enumerate(poses)]
-        return list(run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards"))
+                               noise_sigma, 1.0, seed, k, renderer) for k, T in enumerate(poses)]
+        return list(run_jobs(render_stereo_images, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                          label="render boards"))
 
 
 def write_scene(frames: Sequence[SceneFrame], out_dir: str | Path, *, force: bool = False) -> Path:
