@@ -19,12 +19,15 @@ from scipy.spatial.transform import Rotation
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-#: Board: 9x6 inner corners (10 x 7 squares), 25 mm squares, one square of white margin.
-PATTERN, SQUARE_M, TEXELS = (9, 6), 0.025, 64
+#: Board: 9x7 inner corners (10 x 8 squares), 20 mm squares, one square of white margin.
+PATTERN, SQUARE_M, TEXELS = (9, 7), 0.02, 64
+#: Board poses: distance range (m) from the left camera, largest tilt about the board's x and y axes (deg).
+DISTANCE_M, TILT_DEG = (0.3, 0.7), 40.0
 
 
 def board_png(path: Path) -> tuple[float, float]:
-    """Write the board texture (grey PNG, 1 square margin); return its width and height in metres."""
+    """Write the board texture (grey PNG, 1 square margin); return its width and height in metres (the board's
+    centre is the centre of its inner-corner grid)."""
     cols, rows = PATTERN[0] + 1, PATTERN[1] + 1
     j, i = np.meshgrid(np.arange(cols * TEXELS) // TEXELS, np.arange(rows * TEXELS) // TEXELS)
     squares = np.where((i + j) % 2 == 0, 25, 230).astype(np.uint8)
@@ -93,7 +96,7 @@ def _inside(cams: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[n
 def board_poses(model: object, data: object, left: str, right: str, *, views: int, seed: int,
                 size_m: tuple[float, float]) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """Board (position, rotation matrix) in the world, seeded: the board's centre aimed at a 4x3 grid of image
-    regions of the left camera at 0.35-0.75 m, tilted up to 35 deg, kept only where the whole board is inside
+    regions of the left camera at DISTANCE_M, tilted up to TILT_DEG, kept only where the whole board is inside
     both images (the board frame: x right, y down, z away from the camera, like the optical frame)."""
     rng = np.random.default_rng(seed)
     cams = [_camera(model, data, left), _camera(model, data, right)]
@@ -107,9 +110,9 @@ def board_poses(model: object, data: object, left: str, right: str, *, views: in
         gx, gy = (k % 4 + 0.5) / 4, ((k // 4) % 3 + 0.5) / 3
         for _ in range(400):
             u, v = (gx + rng.uniform(-0.12, 0.12)) * W, (gy + rng.uniform(-0.15, 0.15)) * H
-            d = rng.uniform(0.35, 0.75)
+            d = rng.uniform(*DISTANCE_M)
             ray = np.linalg.solve(K, np.array([u, v, 1.0]))
-            R_opt = Rotation.from_euler("xyz", rng.uniform(-35, 35, 3) * np.array([1.0, 1.0, 0.3]),
+            R_opt = Rotation.from_euler("xyz", rng.uniform(-TILT_DEG, TILT_DEG, 3) * np.array([1.0, 1.0, 0.3]),
                                         degrees=True).as_matrix()
             pos, R = p_left + R_left @ (ray * d), R_left @ R_opt
             if _inside(cams, outline @ R.T + pos, (W, H)):

@@ -62,7 +62,9 @@ def test_principal_pixel_convention_by_rendering(tmp_path: Path) -> None:
     data = mujoco.MjData(model)
     renderer = mujoco.Renderer(model, 240, 320)
     K = np.array([[300.0, 0.0, 159.5 - 12.5], [0.0, 250.0, 119.5 + 7.25], [0.0, 0.0, 1.0]])
-    grid = np.array([[(i - 4) * md.SQUARE_M, (j - 2.5) * md.SQUARE_M, 0.0] for j in range(6) for i in range(9)])
+    cols, rows = md.PATTERN  # the board's centre is the centre of its inner-corner grid
+    grid = np.array([[(i - (cols - 1) / 2) * md.SQUARE_M, (j - (rows - 1) / 2) * md.SQUARE_M, 0.0]
+                     for j in range(rows) for i in range(cols)])
     errors = []
     for k, euler in enumerate(([0, 0, 0], [20, -15, 5], [-25, 20, -5])):
         R_opt = Rotation.from_euler("xyz", euler, degrees=True).as_matrix()
@@ -75,7 +77,7 @@ def test_principal_pixel_convention_by_rendering(tmp_path: Path) -> None:
         renderer.update_scene(data, camera="c")
         path = tmp_path / f"{k}.png"
         cv2.imwrite(str(path), renderer.render()[:, :, ::-1])
-        found = detect(path, (9, 6))
+        found = detect(path, md.PATTERN)
         assert found is not None
         X = grid @ R_opt.T + pos_opt
         uv = X[:, :2] / X[:, 2:] @ K[:2, :2].T + K[:2, 2]
