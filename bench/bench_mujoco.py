@@ -49,7 +49,8 @@ def _errors(rig: object, poses: list[np.ndarray], left: list[Path], right: list[
 def _line(label: str, e: np.ndarray, seconds: float) -> str:
     n = np.linalg.norm(e, axis=1)
     return (f"{label:34s} corners {len(e):5d}  mean ({e[:, 0].mean():+.4f}, {e[:, 1].mean():+.4f}) px  "
-            f"rms {np.sqrt((n ** 2).mean()):.4f}  p95 {np.percentile(n, 95):.4f}  max {n.max():.4f} px  {seconds:5.1f} s")
+            f"rms {np.sqrt((n ** 2).mean()):.4f}  p95 {np.percentile(n, 95):.4f}  max {n.max():.4f} px  "
+            f"{seconds:5.1f} s")
 
 
 def _direct(rig: object, tmp: Path) -> tuple[np.ndarray, float]:

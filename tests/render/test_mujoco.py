@@ -68,7 +68,7 @@ def test_principal_pixel_convention_by_rendering(tmp_path: Path) -> None:
     errors = []
     for k, euler in enumerate(([0, 0, 0], [20, -15, 5], [-25, 20, -5])):
         R_opt = Rotation.from_euler("xyz", euler, degrees=True).as_matrix()
-        pos_opt = np.array([0.03 * k - 0.03, 0.02, 0.7])
+        pos_opt = np.array([0.03 * k - 0.03, 0.02, 0.45])
         flip = np.diag([1.0, -1.0, -1.0])  # optical frame -> MuJoCo camera frame (= world here)
         data.mocap_pos[0] = flip @ pos_opt
         q = Rotation.from_matrix(flip @ R_opt).as_quat()
