@@ -85,7 +85,8 @@ def _direct(rig: object, tmp: Path) -> tuple[np.ndarray, float]:
 
 
 def main() -> None:
-    rig = _rig(640, 480)
+    small = _rig(320, 240)  # fx != fy, off-centre principal points; doubled to 640x480 (fx about 540 px)
+    rig = small.model_copy(update={"left": small.left.scaled(640, 480), "right": small.right.scaled(640, 480)})
     grid = np.array([[i * 0.025, j * 0.025, 0.0] for j in range(6) for i in range(9)])
     print(f"{VIEWS} stereo views, 640x480, fx {rig.left.fx_px} fy {rig.left.fy_px} cx {rig.left.cx_px} "
           f"cy {rig.left.cy_px}; corner error = OpenCV corner - known projection")
@@ -98,6 +99,7 @@ def main() -> None:
             seconds = time.perf_counter() - start
             e = _errors(rig, out.poses, out.left_paths, out.right_paths, grid, (9, 6))
             print(_line(f"s2r {name} supersample {ss}", e, seconds))
+        (tmp / "direct").mkdir()
         e, seconds = _direct(rig, tmp / "direct")
         print(_line("MuJoCo directly (export-mujoco)", e, seconds))
 
