@@ -104,7 +104,9 @@ def summary_lines(result: ValidationResult) -> list[str]:
     """The run as terminal lines: parameters, projection, resolution, recovery, depth, edits, verdict."""
     names = " vs ".join(f"{p.name} ({role})" for role, p in result.roles.items())
     s = result.settings
-    lines = [f"s2r validate: {names}  [{s.views} views at {s.supersample}x, scenes at {s.scene_supersample}x, "
+    drawn = "" if s.renderer == "pybullet" and not s.scene_path else f"rendered by {s.renderer}" + (
+        f" in {s.scene_path}" if s.scene_path else "") + ", "
+    lines = [f"s2r validate: {names}  [{drawn}{s.views} views at {s.supersample}x, scenes at {s.scene_supersample}x, "
              f"preset {s.preset}, seed {s.seed}]"]
     if result.pair:
         lines += ["Parameters:", *_param_lines(result.params)]
