@@ -194,6 +194,18 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
     result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
     if result.edits:
         result.gazebo_xml = _gazebo_xml(real)
+        if result.settings.renderer == "mujoco":
+            result.edits.append(_mujoco_edit(sim, real))
+
+
+def _mujoco_edit(sim: StereoProfile, real: StereoProfile) -> Edit:
+    """The MJCF camera pair that renders like the real camera, with the lens residual MJCF cannot express."""
+    from s2r.sources.mujoco_export import distortion_residual_px
+
+    worst = max(distortion_residual_px(real.left)[0], distortion_residual_px(real.right)[0])
+    lens = f" (MJCF has no lens model: {worst:.2f} px left by the distortion)" if worst >= 0.01 else ""
+    return Edit("MJCF cameras", sim.name, real.name,
+                f"s2r profile export-mujoco {real.name} -o {real.name}_cameras.xml{lens}")
 
 
 def _collect_checks(result: ValidationResult) -> list[Check]:

@@ -226,3 +226,26 @@ def test_render_cli_mujoco(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     depth = np.load(tmp_path / "s" / "depth" / "00.npy")
     assert abs(float(np.nanmedian(depth)) - 1.5) < 1e-3
     assert load_profile_file(tmp_path / "rig.yaml").left.fx_px == rig.left.fx_px
+
+
+def test_validate_names_the_mujoco_export_and_its_lens_residual() -> None:
+    import dataclasses
+
+    from s2r.registry import load_profile
+    from s2r.validate.run import QUICK, ValidationResult, _static_stages
+    from s2r.validate.tolerances import Tolerances
+
+    small = _rig()
+    sim = load_profile("gazebo_dual_camera")
+    real = small.model_copy(update={"left": small.left.scaled(640, 480), "right": small.right.scaled(640, 480)})
+    real = real.model_copy(update={"left": real.left.model_copy(
+        update={"distortion": Distortion(model="plumb_bob", coefficients=(-0.1, 0.0, 0.0, 0.0, 0.0))})})
+    for renderer, expected in (("mujoco", 1), ("pybullet", 0)):
+        result = ValidationResult(roles={"sim": sim, "real": real},
+                                  settings=dataclasses.replace(QUICK, renderer=renderer), tolerances=Tolerances())
+        _static_stages(result, sim, real)
+        edits = [e for e in result.edits if e.parameter == "MJCF cameras"]
+        assert len(edits) == expected
+        if edits:
+            where = edits[0].where
+            assert "s2r profile export-mujoco mj_rig" in where and "px left by the distortion" in where
