@@ -249,3 +249,14 @@ def test_validate_names_the_mujoco_export_and_its_lens_residual() -> None:
         if edits:
             where = edits[0].where
             assert "s2r profile export-mujoco mj_rig" in where and "px left by the distortion" in where
+
+
+def test_missing_mujoco_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                    capsys: pytest.CaptureFixture[str]) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # what a machine without the extra sees
+    code = main(["render", "boards", "gazebo_dual_camera", "--renderer", "mujoco", "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "MuJoCo is not installed" in err and "s2r[mujoco]" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "o").exists()
