@@ -53,20 +53,25 @@ def _left_poses(real: QualityResult, R1: NDArray[np.float64]) -> list[NDArray[np
 
 
 def _sim_views(sim: StereoProfile, names: list[str], poses: list[NDArray[np.float64]], *, preset: str,
-               pattern: tuple[int, int], square_m: float, seed: int, progress: ProgressCallback | None) -> Any:
+               pattern: tuple[int, int], square_m: float, seed: int, progress: ProgressCallback | None,
+               renderer: tuple[str, str | None, str | None]) -> Any:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.views import stereo_view
+    from s2r.render.backend import RendererChoice
     from s2r.render.scenes import render_boards_at
 
-    pairs = render_boards_at(sim, poses, pattern=pattern, square_m=square_m, seed=seed, jobs=1, progress=progress)
+    pairs = render_boards_at(sim, poses, pattern=pattern, square_m=square_m, seed=seed, jobs=1, progress=progress,
+                             renderer=RendererChoice(*renderer))
     pipeline = StereoPipeline(sim, preset=preset)
     return pipeline, [stereo_view(pipeline, n, left, right) for n, (left, right) in zip(names, pairs, strict=True)]
 
 
 def compare_recording(sim: StereoProfile, real: StereoProfile, folder: str | Path, *, pattern: tuple[int, int],
                       square_m: float, preset: str, tol: Tolerances, seed: int = 0,
-                      progress: ProgressCallback | None = None) -> RecordingComparison:
-    """Measure REAL on the recording in ``folder`` and SIM on the same boards at the same poses (module docstring)."""
+                      progress: ProgressCallback | None = None,
+                      renderer: tuple[str, str | None, str | None] = ("pybullet", None, None)) -> RecordingComparison:
+    """Measure REAL on the recording in ``folder`` and SIM on the same boards at the same poses (module docstring),
+    the sim drawn by ``renderer`` (name, MJCF world, world camera: :class:`s2r.render.backend.RendererChoice`)."""
     from s2r.calib.inputs import find_stereo_pairs
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.inputs import FramePaths
@@ -81,7 +86,7 @@ def compare_recording(sim: StereoProfile, real: StereoProfile, folder: str | Pat
     posed = [(f.image, T) for f, T in zip(real_q.frames, _left_poses(real_q, real_pipe.rectification.R1),
                                           strict=True) if T is not None]
     sim_pipe, views = _sim_views(sim, [n for n, _ in posed], [T for _, T in posed], preset=preset, pattern=pattern,
-                                 square_m=square_m, seed=seed, progress=progress)
+                                 square_m=square_m, seed=seed, progress=progress, renderer=renderer)
     sim_q = measure_board_views(sim, views, pattern=pattern, square_m=square_m, fb_px_m=stereo_fb(sim_pipe),
                                 source=f"sim renders of the recovered poses, preset {preset}",
                                 visible_m=stereo_visible_m(sim_pipe))

@@ -259,7 +259,8 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
         began = time.perf_counter()
         result.recording = compare_recording(sim, real, recording.folder, pattern=recording.pattern,
                                              square_m=recording.square_m, preset=settings.preset, tol=tol,
-                                             seed=settings.seed)
+                                             seed=settings.seed, renderer=(settings.renderer, settings.scene_path,
+                                                                           settings.scene_camera))
         result.seconds["recording"] = time.perf_counter() - began
     result.checks = _collect_checks(result)
     result.seconds["total"] = time.perf_counter() - start
