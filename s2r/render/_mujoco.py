@@ -134,15 +134,19 @@ def load_spec(mj: Any, scene_path: str | None) -> Any:
                           hint="check the file with MuJoCo's simulate or compile()") from exc
 
 
-def scene_camera_pose(mj: Any, scene_path: str, camera: str) -> FloatArray:
-    """4x4 pose (metres) of the OpenCV optical frame of ``camera`` in the scene's world, at the initial state."""
+def _compiled_scene(mj: Any, scene_path: str) -> Any:
+    """The scene's MjModel as MuJoCo compiles it; RenderError naming the file when it does not."""
+    spec = load_spec(mj, scene_path)
     try:
-        model = load_spec(mj, scene_path).compile()
-    except RenderError:
-        raise
-    except Exception as exc:
+        return spec.compile()
+    except Exception as exc:  # MuJoCo raises plain ValueError for every compile problem
         raise RenderError(f"MuJoCo cannot compile the scene ({_one_line(exc)})", path=scene_path, field="--world",
                           hint="check the file") from exc
+
+
+def scene_camera_pose(mj: Any, scene_path: str, camera: str) -> FloatArray:
+    """4x4 pose (metres) of the OpenCV optical frame of ``camera`` in the scene's world, at the initial state."""
+    model = _compiled_scene(mj, scene_path)
     cam = mj.mj_name2id(model, mj.mjtObj.mjOBJ_CAMERA, camera)
     if cam < 0:
         names = [model.camera(i).name for i in range(model.ncam)]
@@ -165,13 +169,7 @@ def check_scene(scene_path: str | None, camera: str | None, *, probe_gl: bool) -
     if scene_path is not None and camera is not None:
         scene_camera_pose(mj, scene_path, camera)
     elif scene_path is not None:
-        try:
-            load_spec(mj, scene_path).compile()
-        except RenderError:
-            raise
-        except Exception as exc:
-            raise RenderError(f"MuJoCo cannot compile the scene ({_one_line(exc)})", path=scene_path,
-                              field="--world", hint="check the file") from exc
+        _compiled_scene(mj, scene_path)
 
 
 def optical_to_mujoco_quat(R_world_optical: FloatArray) -> list[float]:
