@@ -23,6 +23,7 @@ Each surface sits on a mocap body, so moving boards between views does not recom
 from __future__ import annotations
 
 import ctypes.util
+import logging
 import os
 import subprocess
 import sys
@@ -39,6 +40,8 @@ from s2r.render.world import Surface
 
 __all__ = ["MujocoBackend", "check_mujoco", "check_scene", "gl_unavailable_reason", "load_spec",
            "optical_to_mujoco_quat", "scene_camera_pose"]
+
+log = logging.getLogger("s2r.render")
 
 FloatArray = NDArray[np.float64]
 #: Optical frame -> MuJoCo camera frame (and back): a rotation by pi about x.
@@ -65,12 +68,16 @@ def _select_gl() -> None:
 
 
 def _import_mujoco() -> Any:
+    """``mujoco``, its GL platform chosen and its warnings sent to the ``s2r.render`` log (debug level) instead of
+    the MUJOCO_LOG.TXT it would write into the working directory."""
     _select_gl()
     try:
         import mujoco
     except ImportError as exc:
         raise RenderError(f"MuJoCo is not installed ({exc})", field="--renderer",
                           hint="pip install 's2r[mujoco]' or use --renderer pybullet") from exc
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(lambda message: log.debug("MuJoCo: %s", message))
     return mujoco
 
 

@@ -217,6 +217,17 @@ def test_render_refuses_bad_worlds_in_one_line(tmp_path: Path, capsys: pytest.Ca
     assert code == 2 and needle in err and len(err.splitlines()) == 1 and "Traceback" not in err
 
 
+def test_unreadable_world_writes_no_mujoco_log(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    """MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory unless told otherwise."""
+    (tmp_path / "world").write_text("<mujoco/>")  # no extension: MuJoCo cannot tell the format, and warns
+    monkeypatch.chdir(tmp_path)
+    code = main(["render", "boards", "gazebo_dual_camera", "--renderer", "mujoco", "--world", "world", "-o", "o"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "world: --world: MuJoCo cannot load the scene" in err and len(err.splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["world"]
+
+
 def test_render_cli_mujoco(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rig = _rig(160, 120)
     (tmp_path / "rig.yaml").write_text(yaml.safe_dump(rig.model_dump(mode="json")))
