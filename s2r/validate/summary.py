@@ -126,5 +126,6 @@ def summary_lines(result: ValidationResult) -> list[str]:
     xml = [e for e in result.edits if e.parameter == "sensor XML"]
     if xml:
         lines.append(f"  where to write each edit: --report, --json; every edit at once: {xml[0].where}")
+    lines += [f"  MuJoCo: {e.where}" for e in result.edits if e.parameter == "MJCF cameras"]
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
     return [*lines, f"({timing})"]

@@ -244,6 +244,7 @@ def test_validate_names_the_mujoco_export_and_its_lens_residual() -> None:
 
     from s2r.registry import load_profile
     from s2r.validate.run import QUICK, ValidationResult, _static_stages
+    from s2r.validate.summary import summary_lines
     from s2r.validate.tolerances import Tolerances
 
     small = _rig()
@@ -257,6 +258,7 @@ def test_validate_names_the_mujoco_export_and_its_lens_residual() -> None:
         _static_stages(result, sim, real)
         edits = [e for e in result.edits if e.parameter == "MJCF cameras"]
         assert len(edits) == expected
+        assert sum("MuJoCo: s2r profile export-mujoco" in line for line in summary_lines(result)) == expected
         if edits:
             where = edits[0].where
             assert "s2r profile export-mujoco mj_rig" in where and "px left by the distortion" in where
