@@ -85,6 +85,12 @@ def _direct(rig: object, tmp: Path) -> tuple[np.ndarray, float]:
 
 
 def main() -> None:
+    from s2r.render._mujoco import gl_unavailable_reason
+
+    reason = gl_unavailable_reason()
+    if reason is not None:
+        print(f"skipped: MuJoCo cannot render offscreen here ({reason})")
+        return
     small = _rig(320, 240)  # fx != fy, off-centre principal points; doubled to 640x480 (fx about 540 px)
     rig = small.model_copy(update={"left": small.left.scaled(640, 480), "right": small.right.scaled(640, 480)})
     grid = np.array([[i * 0.025, j * 0.025, 0.0] for j in range(6) for i in range(9)])

@@ -33,8 +33,9 @@ def _common(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> No
     parser.add_argument("-o", "--output", "--out", dest="out", required=True, metavar="DIR",
                         help="output folder (must be empty unless --force); --out is kept as an alias")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same output")
-    parser.add_argument("--supersample", type=int, default=2, metavar="S",
-                        help="render at S x size and average down (default 2; TinyRenderer has no anti-aliasing)")
+    parser.add_argument("--supersample", type=int, default=None, metavar="S",
+                        help="render at S x size and average down (default 2 with PyBullet, whose TinyRenderer has no "
+                             "anti-aliasing; 1 with MuJoCo, whose filtered textures are as accurate at 1x)")
     parser.add_argument("--noise", type=float, default=0.0, metavar="SIGMA",
                         help="Gaussian sensor noise in grey levels (default 0)")
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
@@ -57,6 +58,13 @@ def add_renderer(parser: argparse.ArgumentParser, *, scene_alias: bool = False) 
     parser.add_argument("--world-camera", default=None, metavar="CAM",
                         help="with --world: the left camera takes this MJCF camera's pose (default: the world's "
                              "origin looking along +x, z up)")
+
+
+def _supersample(args: argparse.Namespace) -> int:
+    """``--supersample``, or the renderer's default: 2 for PyBullet, 1 for MuJoCo."""
+    if args.supersample is not None:
+        return int(args.supersample)
+    return 1 if args.renderer == "mujoco" else 2
 
 
 def renderer_choice(args: argparse.Namespace) -> Any:
@@ -113,7 +121,7 @@ def _cmd_boards(args: argparse.Namespace) -> int:
     bar = ProgressBar(enabled=None if not args.quiet else False)
     result = render_board_set(
         profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
-        supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
+        supersample=_supersample(args), noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
         right_gain=args.right_gain, target=target, cut_share=args.cut_share, renderer=renderer_choice(args),
     )
     if args.target is not None:
@@ -134,7 +142,7 @@ def _cmd_scene(args: argparse.Namespace) -> int:
     check_output_dir(args.out, force=args.force)
     bar = ProgressBar(enabled=None if not args.quiet else False)
     frames = render_scene(
-        profile, scene=args.scene, distances_m=args.distances, supersample=args.supersample, seed=args.seed,
+        profile, scene=args.scene, distances_m=args.distances, supersample=_supersample(args), seed=args.seed,
         noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain,
         renderer=renderer_choice(args),
     )
