@@ -14,7 +14,8 @@ Conventions (measured by rendering, pinned by tests/render/test_mujoco.py):
 
 MuJoCo renders in the calling process (never in forked workers: an EGL/OSMesa context does not survive a fork,
 and the GL implementation already uses every core). Headless: ``MUJOCO_GL`` is set to ``egl`` when unset and no
-display exists (``osmesa`` when only OSMesa is installed); it must be chosen before ``mujoco`` is imported.
+display exists (``osmesa`` when only OSMesa is installed, or when the GL probe finds EGL unusable and OSMesa
+renders); it must be chosen before ``mujoco`` is imported.
 Surfaces are the same OBJ meshes and PNG textures the PyBullet backend loads (MuJoCo reads the OBJ's texture
 coordinates; faces are culled from behind, as in PyBullet).
 Each surface sits on a mocap body, so moving boards between views does not recompile the model.
@@ -23,6 +24,7 @@ Each surface sits on a mocap body, so moving boards between views does not recom
 from __future__ import annotations
 
 import ctypes.util
+import importlib.util
 import logging
 import os
 import subprocess
@@ -55,16 +57,22 @@ _DEFAULT_SCENE_POSE = np.array([[0.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [0.
                                 [0.0, 0.0, 0.0, 1.0]])
 
 
+_CHOSEN: dict[str, str] = {}
+
+
+def _use_gl(platform: str) -> None:
+    os.environ["MUJOCO_GL"] = platform
+    os.environ["PYOPENGL_PLATFORM"] = platform
+    _CHOSEN["platform"] = platform
+
+
 def _select_gl() -> None:
-    """Choose a headless GL platform before ``mujoco`` is imported (respecting a user's MUJOCO_GL)."""
-    if os.environ.get("MUJOCO_GL") or os.environ.get("DISPLAY"):
+    """Choose a headless GL platform before ``mujoco`` is imported (respecting a user's MUJOCO_GL or display):
+    EGL, or OSMesa where it is the only one installed."""
+    if _CHOSEN or os.environ.get("MUJOCO_GL") or os.environ.get("DISPLAY"):
         return
-    if ctypes.util.find_library("EGL") is None and ctypes.util.find_library("OSMesa") is not None:
-        os.environ["MUJOCO_GL"] = "osmesa"
-        os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
-    else:
-        os.environ["MUJOCO_GL"] = "egl"
-        os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    only_osmesa = ctypes.util.find_library("EGL") is None and ctypes.util.find_library("OSMesa") is not None
+    _use_gl("osmesa" if only_osmesa else "egl")
 
 
 def _import_mujoco() -> Any:
@@ -97,21 +105,32 @@ def gl_unavailable_reason() -> str | None:
     worker pool started afterwards (the workers hang in EGL).
     """
     if "status" not in _GL_STATUS:
-        try:
-            _import_mujoco()
-        except RenderError as exc:
-            _GL_STATUS["status"] = exc.message
+        if importlib.util.find_spec("mujoco") is None:
+            _GL_STATUS["status"] = "MuJoCo is not installed (pip install 's2r[mujoco]')"
             return _GL_STATUS["status"]
-        try:
-            done = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True,
-                                  timeout=_PROBE_TIMEOUT_S, env=dict(os.environ), check=False)
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            _GL_STATUS["status"] = " ".join(f"{type(exc).__name__}: {exc}".split())
-        else:
-            lines = [line for line in done.stderr.strip().splitlines() if line.strip()]
-            _GL_STATUS["status"] = None if done.returncode == 0 else (
-                f"MUJOCO_GL={os.environ.get('MUJOCO_GL')}: {lines[-1] if lines else f'exit {done.returncode}'}")
+        _select_gl()
+        reason = _probe(os.environ.get("MUJOCO_GL", ""))
+        fallback = _CHOSEN.get("platform") == "egl" and "mujoco" not in sys.modules
+        if reason is not None and fallback and ctypes.util.find_library("OSMesa") is not None \
+                and _probe("osmesa") is None:  # EGL installed but unusable (no device): OSMesa renders
+            _use_gl("osmesa")
+            reason = None
+        _GL_STATUS["status"] = reason
     return _GL_STATUS["status"]
+
+
+def _probe(platform: str) -> str | None:
+    """Try an 8x8 offscreen render with ``MUJOCO_GL=platform`` in a child process; None or why it failed."""
+    env = {**os.environ, "MUJOCO_GL": platform, "PYOPENGL_PLATFORM": platform} if platform else dict(os.environ)
+    try:
+        done = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True,
+                              timeout=_PROBE_TIMEOUT_S, env=env, check=False)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return " ".join(f"{type(exc).__name__}: {exc}".split())
+    if done.returncode == 0:
+        return None
+    lines = [line for line in done.stderr.strip().splitlines() if line.strip()]
+    return f"MUJOCO_GL={platform or 'default'}: {lines[-1] if lines else f'exit {done.returncode}'}"
 
 
 def check_mujoco() -> None:

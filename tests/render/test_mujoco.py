@@ -273,3 +273,11 @@ def test_missing_mujoco_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     err = capsys.readouterr().err.strip()
     assert code == 2 and "MuJoCo is not installed" in err and "s2r[mujoco]" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_gl_probe_names_the_platform_that_fails() -> None:
+    """The probe runs in a child process; a platform that cannot render here is named in the reason."""
+    from s2r.render._mujoco import _probe
+
+    reason = _probe("no-such-platform")
+    assert reason is not None and reason.startswith("MUJOCO_GL=no-such-platform:") and "\n" not in reason
