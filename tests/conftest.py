@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, SimulationSettings, StereoProfile
+
+# MuJoCo picks its GL platform when first imported: headless test runs render through EGL whichever test imports it
+# first (s2r.render._mujoco chooses the same, but only when it is the first importer).
+if not os.environ.get("DISPLAY"):
+    import ctypes.util
+
+    only_osmesa = ctypes.util.find_library("EGL") is None and ctypes.util.find_library("OSMesa") is not None
+    os.environ.setdefault("MUJOCO_GL", "osmesa" if only_osmesa else "egl")
 
 #: Real recorded data kept outside the repository (see ../shared/data/README.md).
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

@@ -1,4 +1,4 @@
-"""Imports run one way (DESIGN.md): a wrong-way import, or cv2/pybullet outside their homes, fails here."""
+"""Imports run one way (DESIGN.md): a wrong-way import, or cv2/pybullet/mujoco outside their homes, fails here."""
 
 from __future__ import annotations
 
@@ -25,6 +25,8 @@ LAYERS: dict[str, int] = {
 CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
              "quality", "drift", "sensor", "sensor_fit"}
 PYBULLET_HOMES = {"render"}
+#: MuJoCo (an optional extra) is imported by one module only, lazily, when ``--renderer mujoco`` is asked for.
+MUJOCO_HOMES = {"render._mujoco"}
 
 
 def _unit(path: Path) -> str:
@@ -72,7 +74,7 @@ def test_heavy_libraries_stay_home() -> None:
     wrong = []
     for path in _modules():
         rel = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
-        homes = {"cv2": CV2_HOMES, "pybullet": PYBULLET_HOMES}
+        homes = {"cv2": CV2_HOMES, "pybullet": PYBULLET_HOMES, "mujoco": MUJOCO_HOMES}
         for name in _imports(path):
             lib = name.split(".")[0]
             if lib in homes and not any(rel == h or rel.startswith(h + ".") for h in homes[lib]):

@@ -25,6 +25,7 @@ from s2r.cli import (
     check_cmd,
     depth_cmd,
     depth_quality_cmd,
+    mujoco_cmd,
     profile_cmd,
     render_cmd,
     sensor_cmd,
@@ -92,6 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     profile_sub = profile_cmd.register(sub)
     sources_cmd.register(sub, profile_sub)
+    mujoco_cmd.register(profile_sub)
     render_cmd.register(sub)
     depth_cmd.register(sub)
     depth_quality_cmd.register(sub)

@@ -1,4 +1,4 @@
-"""``s2r render boards | scene``: synthetic calibration sets and ground-truth depth scenes (PyBullet)."""
+"""``s2r render boards | scene``: synthetic calibration sets and ground-truth depth scenes (PyBullet or MuJoCo)."""
 
 from __future__ import annotations
 
@@ -22,19 +22,23 @@ from s2r.fileio import atomic_write_text, read_text_file
 if TYPE_CHECKING:
     from s2r.sensor_model import SensorModel
 
-__all__ = ["SCENE_CHOICES", "register"]
+__all__ = ["RENDERER_CHOICES", "SCENE_CHOICES", "add_renderer", "register", "renderer_choice"]
+
+#: Renderer names (equal to ``s2r.render.backend.RENDERERS``; repeated so the CLI starts without pybullet).
+RENDERER_CHOICES = ("pybullet", "mujoco")
 
 #: Scene names (equal to ``s2r.render.SCENES``; repeated here so the CLI imports pybullet only when rendering).
 SCENE_CHOICES = ("planes", "slanted", "span", "room")
 
 
-def _common(parser: argparse.ArgumentParser) -> None:
+def _common(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> None:
     parser.add_argument("profile", help="profile name or path")
     parser.add_argument("-o", "--output", "--out", dest="out", required=True, metavar="DIR",
                         help="output folder (must be empty unless --force); --out is kept as an alias")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same output")
-    parser.add_argument("--supersample", type=int, default=2, metavar="S",
-                        help="render at S x size and average down (default 2; TinyRenderer has no anti-aliasing)")
+    parser.add_argument("--supersample", type=int, default=None, metavar="S",
+                        help="render at S x size and average down (default 2 with PyBullet, whose TinyRenderer has no "
+                             "anti-aliasing; 1 with MuJoCo, whose filtered textures are as accurate at 1x)")
     parser.add_argument("--noise", type=float, default=0.0, metavar="SIGMA",
                         help="Gaussian sensor noise in grey levels (default 0)")
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
@@ -43,18 +47,49 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sensor-model", type=Path, default=None, metavar="FILE",
                         help="blur and grey-level noise of this sensor.yaml (s2r sensor fit) on both images; default "
                         "the profile's own sensor: section")
+    add_renderer(parser, scene_alias=scene_alias)
     add_force(parser)
     add_json(parser)
 
 
+def add_renderer(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> None:
+    """Add ``--renderer``, ``--world SCENE.xml`` (``--scene`` too when ``scene_alias``) and ``--world-camera``."""
+    parser.add_argument("--renderer", choices=RENDERER_CHOICES, default="pybullet",
+                        help="pybullet (default: TinyRenderer, flat light) or mujoco (MuJoCo's OpenGL renderer, "
+                             "headless through EGL or OSMesa; pip install 's2r[mujoco]')")
+    names = ["--world", "--scene"] if scene_alias else ["--world"]
+    parser.add_argument(*names, dest="world", type=Path, default=None, metavar="SCENE.xml",
+                        help="with --renderer mujoco: render inside this MJCF world (its lights, materials and "
+                             "objects) with the boards and surfaces inserted")
+    parser.add_argument("--world-camera", default=None, metavar="CAM",
+                        help="with --world: the left camera takes this MJCF camera's pose (default: the world's "
+                             "origin looking along +x, z up)")
+
+
+def _supersample(args: argparse.Namespace) -> int:
+    """``--supersample``, or the renderer's default: 2 for PyBullet, 1 for MuJoCo."""
+    if args.supersample is not None:
+        return int(args.supersample)
+    return 1 if args.renderer == "mujoco" else 2
+
+
+def renderer_choice(args: argparse.Namespace) -> Any:
+    """The :class:`s2r.render.backend.RendererChoice` of ``--renderer`` / ``--world`` / ``--world-camera``."""
+    from s2r.render.backend import RendererChoice
+
+    world = None if args.world is None else str(args.world)
+    return RendererChoice(args.renderer, world, args.world_camera)
+
+
 def register(sub: Any) -> None:
     """Add ``render boards`` and ``render scene``."""
-    parser = sub.add_parser("render", help="render calibration boards or ground-truth depth scenes (PyBullet)")
+    parser = sub.add_parser("render", help="render calibration boards or ground-truth depth scenes (PyBullet or "
+                                           "MuJoCo)")
     render_sub = parser.add_subparsers(dest="render_command", required=True, metavar="WHAT")
 
     p_boards = render_sub.add_parser("boards", help="a stereo chessboard calibration set with true poses",
                                      description="Writes DIR/left/NN.png, DIR/right/NN.png and DIR/truth.yaml.")
-    _common(p_boards)
+    _common(p_boards, scene_alias=True)
     p_boards.add_argument("--views", type=int, default=20, metavar="N", help="number of views (default 20)")
     p_boards.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6), metavar="COLSxROWS",
                           help="inner corners (default 9x6)")
@@ -101,8 +136,9 @@ def _cmd_boards(args: argparse.Namespace) -> int:
     bar = ProgressBar(enabled=None if not args.quiet else False)
     result = render_board_set(
         profile, args.out, views=args.views, pattern=args.pattern, square_m=args.square, seed=args.seed,
-        supersample=args.supersample, noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
-        right_gain=args.right_gain, target=target, cut_share=args.cut_share, sensor=_sensor(args),
+        supersample=_supersample(args), noise_sigma=args.noise, jobs=args.jobs, force=args.force, progress=bar,
+        right_gain=args.right_gain, target=target, cut_share=args.cut_share, renderer=renderer_choice(args),
+        sensor=_sensor(args),
     )
     if args.target is not None:
         atomic_write_text(result.out_dir / "target.yaml", read_text_file(args.target), force=True,
@@ -123,8 +159,9 @@ def _cmd_scene(args: argparse.Namespace) -> int:
     check_output_dir(args.out, force=args.force)
     bar = ProgressBar(enabled=None if not args.quiet else False)
     frames = render_scene(
-        profile, scene=args.scene, distances_m=args.distances, supersample=args.supersample, seed=args.seed,
-        noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain, sensor=_sensor(args),
+        profile, scene=args.scene, distances_m=args.distances, supersample=_supersample(args), seed=args.seed,
+        noise_sigma=args.noise, jobs=args.jobs, progress=bar, right_gain=args.right_gain,
+        renderer=renderer_choice(args), sensor=_sensor(args),
     )
     out = write_scene(frames, args.out, force=args.force)
     if args.json:

@@ -63,6 +63,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--sensor-model", metavar="FILE",
                         help="sensor.yaml (s2r sensor fit): the SIM camera's blur and noise on every sim render; "
                         "default each profile's own sensor: section")
+    from s2r.cli.render_cmd import add_renderer
+
+    add_renderer(parser, scene_alias=True)
     add_json(parser)
     add_force(parser)
     parser.set_defaults(func=_cmd_validate)
@@ -94,7 +97,14 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         check_side_by_side(real, path=args.real)
         if not args.roles_as_given:
             _check_roles(sim, real, sim_path=args.sim, real_path=args.real)
-    settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset)
+    settings = dataclasses.replace(QUICK if args.quick else FULL, seed=args.seed, preset=args.preset,
+                                   renderer=args.renderer, scene_path=None if args.world is None else str(args.world),
+                                   scene_camera=args.world_camera)
+    if args.renderer != "pybullet" or args.world is not None:
+        from s2r.cli.render_cmd import renderer_choice
+        from s2r.render.backend import check_renderer
+
+        check_renderer(renderer_choice(args), probe_gl=True)  # MuJoCo missing, no GL, a bad world file: one line now
     if args.distances is not None:
         try:
             settings = dataclasses.replace(settings, distances_m=parse_distances(args.distances))

@@ -1,4 +1,5 @@
-"""PyBullet camera simulation: boards and ground-truth depth scenes (the only pybullet importer).
+"""Camera simulation: boards and ground-truth depth scenes, drawn by PyBullet (default) or MuJoCo (the only
+importers of pybullet and, in ``_mujoco``, of mujoco; :mod:`s2r.render.backend` is the seam between them).
 
 - :func:`render_board_set`: a stereo chessboard calibration set (left/, right/, truth.yaml) through a profile.
 - :func:`render_scene` / :func:`write_scene`: textured scenes with exact depth and rectified disparity.

@@ -20,6 +20,7 @@ from s2r.errors import RenderError
 from s2r.fileio import OutputBatch
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
+from s2r.render.backend import RendererChoice, check_renderer, render_workers
 from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names, remove_stale_numbered
 from s2r.render.parallel import run_jobs
 from s2r.render.poses import BoardGeometry, sample_board_poses
@@ -115,6 +116,7 @@ def render_board_set(
     jobs: int | None = None, force: bool = False, progress: ProgressCallback | None = None,
     right_gain: float = 1.0, target: AnyTarget | None = None, cut_share: float | None = None,
     sensor: SensorModel | None = None,
+    renderer: RendererChoice | None = None,
 ) -> BoardSet:
     """Render a stereo calibration set of ``views`` chessboard views through ``profile`` into ``out_dir``.
 
@@ -136,7 +138,10 @@ def render_board_set(
             AprilGrid target, whose corners are identified one by one; 0 otherwise).
         sensor: a sensor model whose blur and grey-level noise both images get (:mod:`s2r.sensor`); default
             the profile's own ``sensor:`` section (none: perfect images).
+        renderer: the backend that draws (default PyBullet; :mod:`s2r.render.backend`).
     """
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     _check_board(pattern, square_m, views)
     sensor = profile.sensor if sensor is None else sensor
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
@@ -157,12 +162,14 @@ def render_board_set(
     with tempfile.TemporaryDirectory(prefix="s2r-boards-") as tmp:
         mesh, texture = board_surface(Path(tmp), board, layout)
         jobs_list = [
-            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k, sensor)
+            StereoJob(left_setup, right_setup, (Surface(mesh, texture, T),), noise_sigma, right_gain, seed, k,
+                      renderer, sensor)
             for k, T in enumerate(poses)
         ]
-        images = run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards")
+        images = run_jobs(render_stereo_images, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                          label="render boards")
     options: dict[str, Any] = {"supersample": supersample, "seed": seed, "noise_sigma": noise_sigma,
-                               "right_gain": right_gain}
+                               "right_gain": right_gain, "renderer": renderer.name}
     if sensor is not None:
         options["sensor"] = sensor.model_dump(mode="json", exclude_none=True)
     if layout is not None:

@@ -6,16 +6,17 @@ pose follows the profile's OpenCV extrinsics, ``X_right = R X_left + T``, so ``T
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
 from s2r.profile import StereoProfile
+from s2r.render.backend import RendererChoice, get_backend
 from s2r.render.poses import clip_planes
 from s2r.render.sensor import CameraSetup, Capture, capture
-from s2r.render.world import Surface, set_world
+from s2r.render.world import Surface
 from s2r.sensor.images import degrade_image
 from s2r.sensor_model import SensorModel
 
@@ -57,6 +58,7 @@ class StereoJob:
     right_gain: float
     seed: int
     index: int
+    renderer: RendererChoice = field(default_factory=RendererChoice)
     sensor: SensorModel | None = None
 
 
@@ -76,9 +78,10 @@ def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng
 
 
 def render_stereo(job: StereoJob) -> tuple[Capture, Capture]:
-    """Set the world to the job's surfaces and capture both cameras (in this process)."""
-    set_world(job.surfaces)
-    return capture(job.left), capture(job.right)
+    """Set the job's renderer's world to its surfaces and capture both cameras (in this process)."""
+    backend = get_backend(job.renderer)
+    backend.set_world(job.surfaces)
+    return capture(job.left, backend), capture(job.right, backend)
 
 
 def render_stereo_images(job: StereoJob) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:

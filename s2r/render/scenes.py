@@ -24,6 +24,7 @@ from s2r.fileio import OutputBatch, npy_bytes
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
+from s2r.render.backend import RendererChoice, check_renderer, render_workers
 from s2r.render.boards import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
 from s2r.render.outputs import clear_numbered, encode_png, numbered_names, remove_stale_numbered
@@ -108,6 +109,7 @@ def render_scene(
     profile: StereoProfile, *, scene: str = "planes", distances_m: Sequence[float] = (0.5, 1.0, 2.0, 3.0, 5.0),
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
     progress: ProgressCallback | None = None, right_gain: float = 1.0, sensor: SensorModel | None = None,
+    renderer: RendererChoice | None = None,
 ) -> list[SceneFrame]:
     """Render ``scene`` ("planes", "slanted", "span" or "room") through ``profile`` with exact ground truth.
 
@@ -117,8 +119,10 @@ def render_scene(
     one frame of a textured box room (back wall 0.5 m beyond the farthest distance) with a textured box at each
     distance. See the module docstring for how the rectified ground truth is computed. ``right_gain`` scales
     the right image's grey levels; ``sensor`` (default the profile's own ``sensor:`` section) blurs and adds noise
-    to both images (:mod:`s2r.sensor`).
+    to both images (:mod:`s2r.sensor`). ``renderer`` picks the backend (default PyBullet).
     """
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma, right_gain=right_gain)
     sensor = profile.sensor if sensor is None else sensor
     near, far = clip_planes(profile)
@@ -129,16 +133,18 @@ def render_scene(
     with tempfile.TemporaryDirectory(prefix="s2r-scene-") as tmp:
         layouts = scene_layouts(profile, Path(tmp), scene=scene, distances_m=distances, seed=seed)
         jobs_list = [
-            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k, sensor),
+            _SceneJob(StereoJob(left_setup, right_setup, surfaces, noise_sigma, right_gain, seed, k, renderer,
+                                sensor),
                       rect.R1, rect.P1, rect.image_size, rect.fx_px * rect.baseline_m, rect.doffs_px)
             for k, (surfaces, _) in enumerate(layouts)
         ]
-        results = run_jobs(_render_frame, jobs_list, jobs=jobs, progress=progress, label=f"render {scene}")
+        results = run_jobs(_render_frame, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                           label=f"render {scene}")
     frames = []
     for name, (_, desc), (left, right, depth, depth_rect, disp) in zip(numbered_names(len(layouts)), layouts,
                                                                       results, strict=True):
-        description = {**desc, "profile": profile.name, "supersample": supersample, "seed": seed,
-                       "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info,
+        description = {**desc, "profile": profile.name, "renderer": renderer.name, "supersample": supersample,
+                       "seed": seed, "noise_sigma": noise_sigma, "right_gain": right_gain, "rectification": rect_info,
                        **({} if sensor is None else {"sensor": sensor.model_dump(mode="json", exclude_none=True)})}
         frames.append(SceneFrame(name, left, right, depth, disp, depth_rect, description))
     return frames
@@ -148,11 +154,15 @@ def render_boards_at(
     profile: StereoProfile, poses: Sequence[NDArray[np.float64]], *, pattern: tuple[int, int], square_m: float,
     supersample: int = 2, seed: int = 0, noise_sigma: float = 0.0, jobs: int | None = None,
     progress: ProgressCallback | None = None, sensor: SensorModel | None = None,
+    renderer: RendererChoice | None = None,
 ) -> list[tuple[NDArray[np.uint8], NDArray[np.uint8]]]:
     """Render a chessboard (``pattern`` inner corners, ``square_m`` squares, the calibration boards' margin) at each
     pose ``T_left_board`` (4x4, board frame -> LEFT optical frame, metres; origin at the first inner corner, x along
     the columns, y along the rows) through ``profile``: one (left, right) BGR uint8 pair per pose (``sensor``, default
-    the profile's own ``sensor:`` section: its blur and noise on both images)."""
+    the profile's own ``sensor:`` section: its blur and noise on both images; drawn by ``renderer``, default
+    PyBullet)."""
+    renderer = renderer or RendererChoice()
+    check_renderer(renderer)
     check_render_options(supersample=supersample, noise_sigma=noise_sigma)
     sensor = profile.sensor if sensor is None else sensor
     board = BoardGeometry((int(pattern[0]), int(pattern[1])), float(square_m), BORDER_SQUARES)
@@ -160,8 +170,9 @@ def render_boards_at(
     with tempfile.TemporaryDirectory(prefix="s2r-boards-at-") as tmp:
         mesh, texture = board_surface(Path(tmp), board)
         jobs_list = [StereoJob(left_setup, right_setup, (Surface(mesh, texture, np.asarray(T, np.float64)),),
-                               noise_sigma, 1.0, seed, k, sensor) for k, T in enumerate(poses)]
-        return list(run_jobs(render_stereo_images, jobs_list, jobs=jobs, progress=progress, label="render boards"))
+                               noise_sigma, 1.0, seed, k, renderer, sensor) for k, T in enumerate(poses)]
+        return list(run_jobs(render_stereo_images, jobs_list, jobs=render_workers(renderer, jobs), progress=progress,
+                          label="render boards"))
 
 
 def write_scene(frames: Sequence[SceneFrame], out_dir: str | Path, *, force: bool = False) -> Path:

@@ -1,4 +1,5 @@
-"""A profile camera emulated with PyBullet: supersampling, lens distortion and exact ground-truth depth.
+"""A profile camera emulated by a render backend (PyBullet or MuJoCo): supersampling, lens distortion and exact
+ground-truth depth.
 
 One capture renders an ideal pinhole ("wide" camera) in the camera's optical frame at ``S`` times the
 resolution, wide enough to cover the distorted field, then
@@ -23,7 +24,8 @@ from numpy.typing import NDArray
 
 from s2r.errors import RenderError
 from s2r.profile import Camera
-from s2r.render.camera import PinholeView, depth_buffer_to_z, render_pinhole
+from s2r.render.backend import Backend, get_backend
+from s2r.render.camera import PinholeView
 from s2r.render.cubemap import CubeMap, lens_rays, plan_cube_map
 from s2r.render.distortion import is_pinhole, normalised_rays, undistort_pixels
 
@@ -183,20 +185,20 @@ class Capture:
 
     Attributes:
         rgb: (H, W, 3) uint8 RGB image in the profile camera's geometry (distortion included).
-        depth_buffer: (Hw, Ww) float32 OpenGL depth buffer of the wide render.
+        wide_z: (Hw, Ww) float32 metric z (m) of the wide render along its optical axis, NaN where nothing was hit.
         prep: the setup's precomputation (wide K and maps).
     """
 
-    def __init__(self, rgb: NDArray[np.uint8], depth_buffer: NDArray[np.float32], prep: Prepared) -> None:
+    def __init__(self, rgb: NDArray[np.uint8], wide_z: NDArray[np.float32], prep: Prepared) -> None:
         self.rgb = rgb
-        self.depth_buffer = depth_buffer
+        self.wide_z = wide_z
         self.prep = prep
 
     @cached_property
     def inv_z(self) -> NDArray[np.float32]:
         """(Hw, Ww) float32 inverse depth 1/z (1/m) of the wide render, 0 where nothing was hit."""
-        z = depth_buffer_to_z(self.depth_buffer, self.prep.wide.near, self.prep.wide.far)
-        return np.where(np.isfinite(z), 1.0 / z, 0.0).astype(np.float32)
+        z = self.wide_z
+        return np.where(np.isfinite(z) & (z > 0), 1.0 / np.where(z > 0, z, 1.0), 0.0).astype(np.float32)
 
     @cached_property
     def edge(self) -> NDArray[np.uint8]:
@@ -236,26 +238,28 @@ def _edges(inv_z: NDArray[np.float32]) -> NDArray[np.uint8]:
     return np.asarray(cv2.dilate(bad.astype(np.uint8), kernel), dtype=np.uint8)
 
 
-def _render_atlas(cube: CubeMap) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
-    """Render every face of ``cube`` into one atlas: RGB (black between faces) and depth buffer (1 = far)."""
+def _render_atlas(cube: CubeMap, backend: Backend) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """Render every face of ``cube`` into one atlas: RGB (black between faces) and z (NaN = nothing)."""
     width, height = cube.atlas_size
     rgb = np.zeros((height, width, 3), np.uint8)
-    depth = np.ones((height, width), np.float32)
+    depth = np.full((height, width), np.nan, np.float32)
     for view, column in zip(cube.faces, cube.offsets, strict=True):
-        face_rgb, face_depth = render_pinhole(view)
+        face_rgb, face_depth = backend.render(view)
         rgb[: view.height, column:column + view.width] = face_rgb
         depth[: view.height, column:column + view.width] = face_depth
     return rgb, depth
 
 
-def capture(setup: CameraSetup) -> Capture:
-    """Render the current world through ``setup`` (supersampled, distorted); see the module docstring."""
+def capture(setup: CameraSetup, backend: Backend | None = None) -> Capture:
+    """Render the backend's current world (default: PyBullet's) through ``setup`` (supersampled, distorted);
+    see the module docstring."""
+    backend = backend or get_backend()
     prep = prepared(setup)
     if prep.cube is None:
-        rgb_w, depth_w = render_pinhole(prep.wide)
+        rgb_w, depth_w = backend.render(prep.wide)
         border = cv2.BORDER_REPLICATE
     else:
-        rgb_w, depth_w = _render_atlas(prep.cube)
+        rgb_w, depth_w = _render_atlas(prep.cube, backend)
         border = cv2.BORDER_CONSTANT  # black outside the fisheye's field
     img = rgb_w
     if prep.map_hi is not None:

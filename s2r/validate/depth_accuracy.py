@@ -161,9 +161,11 @@ def _sample_index(frames: Sequence[Any]) -> int:
 
 
 def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[float]]], *, supersample: int,
-                seed: int, jobs: int | None, progress: ProgressCallback | None
+                seed: int, jobs: int | None, progress: ProgressCallback | None, renderer: str = "pybullet",
+                scene_path: str | None = None, scene_camera: str | None = None
                 ) -> tuple[list[Any], list[tuple[str, Sequence[float]]]]:
     """Frames of every scene; scenes after the first are optional (skipped with a warning if unrenderable)."""
+    from s2r.render.backend import RendererChoice
     from s2r.render.scenes import render_scene
 
     frames: list[Any] = []
@@ -172,7 +174,8 @@ def _render_all(profile: StereoProfile, scenes: Sequence[tuple[str, Sequence[flo
         distances = nominal if scene == "room" else jitter_distances(nominal, seed=seed + 7919 * k)
         try:
             frames += render_scene(profile, scene=scene, distances_m=tuple(distances), supersample=supersample,
-                                   seed=seed, jobs=jobs, progress=progress)
+                                   seed=seed, jobs=jobs, progress=progress,
+                                   renderer=RendererChoice(renderer, scene_path, scene_camera))
         except RenderError as exc:
             if k == 0:
                 raise
@@ -186,7 +189,8 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
                            scenes: Sequence[tuple[str, Sequence[float]]] = (("planes", (0.5, 1.0, 2.0, 3.0, 5.0)),),
                            bins: Sequence[tuple[float, float]] = DEFAULT_BINS_M, supersample: int = 2,
                            seed: int = 0, jobs: int | None = 1,
-                           progress: ProgressCallback | None = None) -> DepthAccuracy:
+                           progress: ProgressCallback | None = None, renderer: str = "pybullet",
+                           scene_path: str | None = None, scene_camera: str | None = None) -> DepthAccuracy:
     """Render each ``(scene, distances_m)`` through ``profile``, run the depth pipeline with ``preset``, score.
 
     Plane distances are jittered per frame (:func:`s2r.validate.depth_sampling.jitter_distances`); every frame's
@@ -197,7 +201,8 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
 
     start = time.perf_counter()
     frames, rendered_scenes = _render_all(profile, scenes, supersample=supersample, seed=seed, jobs=jobs,
-                                          progress=progress)
+                                          progress=progress, renderer=renderer, scene_path=scene_path,
+                                          scene_camera=scene_camera)
     rendered = time.perf_counter()
     pipeline = StereoPipeline(profile, preset=preset)
     truths, rels, samples = [], [], None

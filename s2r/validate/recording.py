@@ -81,15 +81,16 @@ def _left_poses(real: QualityResult, R1: NDArray[np.float64] | None) -> list[NDA
 
 
 def _rendered_sim(sim: StereoProfile, real_q: QualityResult, R1: NDArray[np.float64] | None, *, preset: str,
-                  pattern: tuple[int, int], square_m: float, seed: int,
-                  progress: ProgressCallback | None) -> QualityResult:
+                  pattern: tuple[int, int], square_m: float, seed: int, progress: ProgressCallback | None,
+                  renderer: tuple[str, str | None, str | None] = ("pybullet", None, None)) -> QualityResult:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.views import stereo_fb, stereo_view, stereo_visible_m
+    from s2r.render.backend import RendererChoice
     from s2r.render.scenes import render_boards_at
 
     posed = [(f.image, T) for f, T in zip(real_q.frames, _left_poses(real_q, R1), strict=True) if T is not None]
     pairs = render_boards_at(sim, [T for _, T in posed], pattern=pattern, square_m=square_m, seed=seed, jobs=1,
-                             progress=progress)
+                             progress=progress, renderer=RendererChoice(*renderer))
     pipe = StereoPipeline(sim, preset=preset)
     views = [stereo_view(pipe, name, left, right) for (name, _), (left, right) in zip(posed, pairs, strict=True)]
     return measure_board_views(sim, views, pattern=pattern, square_m=square_m, fb_px_m=stereo_fb(pipe),
@@ -99,14 +100,16 @@ def _rendered_sim(sim: StereoProfile, real_q: QualityResult, R1: NDArray[np.floa
 
 def compare_recording(sim: StereoProfile, real: StereoProfile, folder: str | Path | RecordingSource, *,
                       pattern: tuple[int, int], square_m: float, preset: str, tol: Tolerances, seed: int = 0,
-                      progress: ProgressCallback | None = None) -> RecordingComparison:
+                      progress: ProgressCallback | None = None,
+                      renderer: tuple[str, str | None, str | None] = ("pybullet", None, None)) -> RecordingComparison:
     """Measure REAL on its recording ``folder`` (any ``SRC``) and SIM on renders of the same boards at the same
-    poses (module docstring)."""
+    poses (module docstring), drawn by ``renderer`` (name, MJCF world, world camera:
+    :class:`s2r.render.backend.RendererChoice`)."""
     source = _source(folder, "--recording")
     real_q, R1 = _measure(real, source, side="real", pattern=pattern, square_m=square_m, preset=preset,
                           progress=progress)
     sim_q = _rendered_sim(sim, real_q, R1, preset=preset, pattern=pattern, square_m=square_m, seed=seed,
-                          progress=progress)
+                          progress=progress, renderer=renderer)
     return RecordingComparison(source.describe(), pattern, square_m, real_q, sim_q,
                                compare_bins(real_q, sim_q, tol, seed=seed))
 

@@ -117,19 +117,23 @@ def lens_model_for(profile: StereoProfile) -> str:
 
 def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int = 20, supersample: int = 2,
                         seed: int = 0, jobs: int | None = 1, work_dir: Path | None = None,
-                        progress: ProgressCallback | None = None) -> RecoveryResult:
+                        progress: ProgressCallback | None = None, renderer: str = "pybullet",
+                        scene_path: str | None = None, scene_camera: str | None = None) -> RecoveryResult:
     """Render ``views`` board pairs through ``profile``, calibrate them, compare (see module doc).
 
-    Images go to a temporary folder (or ``work_dir``), removed afterwards when temporary.
+    Images go to a temporary folder (or ``work_dir``), removed afterwards when temporary. ``renderer`` ("pybullet"
+    or "mujoco") draws them, MuJoCo optionally inside the MJCF world ``scene_path`` (left camera at ``scene_camera``).
     """
     from s2r.calib import calibrate_stereo
+    from s2r.render.backend import RendererChoice
     from s2r.render.boards import render_board_set
 
     with tempfile.TemporaryDirectory(prefix="s2r-validate-boards-") as tmp:
         out_dir = Path(tmp) if work_dir is None else work_dir
         start = time.perf_counter()
         boards = render_board_set(profile, out_dir / "boards", views=views, seed=seed, supersample=supersample,
-                                  jobs=jobs, force=True, progress=progress)
+                                  jobs=jobs, force=True, progress=progress,
+                                  renderer=RendererChoice(renderer, scene_path, scene_camera))
         rendered = time.perf_counter()
         calib_log = logging.getLogger("s2r.calib")
         level = calib_log.level

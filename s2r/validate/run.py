@@ -196,6 +196,18 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
     result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
     if result.edits:
         result.gazebo_xml = _gazebo_xml(real)
+        if result.settings.renderer == "mujoco":
+            result.edits.append(_mujoco_edit(sim, real))
+
+
+def _mujoco_edit(sim: StereoProfile, real: StereoProfile) -> Edit:
+    """The MJCF camera pair that renders like the real camera, with the lens residual MJCF cannot express."""
+    from s2r.sources.mujoco_export import distortion_residual_px
+
+    worst = max(distortion_residual_px(real.left)[0], distortion_residual_px(real.right)[0])
+    lens = f" (MJCF has no lens model: {worst:.2f} px left by the distortion)" if worst >= 0.01 else ""
+    return Edit("MJCF cameras", sim.name, real.name,
+                f"s2r profile export-mujoco {real.name} -o {real.name}_cameras.xml{lens}")
 
 
 def _collect_checks(result: ValidationResult) -> list[Check]:
@@ -222,7 +234,8 @@ def _compare_recording(sim: StereoProfile, real: StereoProfile, spec: RecordingS
         return compare_recordings(sim, real, sim_source=spec.sim, real_source=spec.folder, pattern=spec.pattern,
                                   square_m=spec.square_m, preset=settings.preset, tol=tol, seed=settings.seed)
     return compare_recording(sim, real, spec.folder, pattern=spec.pattern, square_m=spec.square_m,
-                             preset=settings.preset, tol=tol, seed=settings.seed)
+                             preset=settings.preset, tol=tol, seed=settings.seed,
+                             renderer=(settings.renderer, settings.scene_path, settings.scene_camera))
 
 
 def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerances: Tolerances | None = None,

@@ -15,7 +15,8 @@ class Settings:
     """How much work each stage does: board views and their supersampling, the distances (metres) of the
     planes (jittered per frame), whether they are "span" planes (default) or fronto-parallel ones, further
     ``(scene, distances)`` pairs ("slanted", "room"), and the scenes' supersampling (kept at 2: without
-    anti-aliasing, 1x renders add matching error that is not the camera's)."""
+    anti-aliasing, 1x renders add matching error that is not the camera's), and the renderer that draws them
+    (``--renderer``: "pybullet" or "mujoco", the latter optionally inside the user's MJCF ``scene_path``)."""
 
     @property
     def scenes(self) -> tuple[tuple[str, tuple[float, ...]], ...]:
@@ -40,13 +41,17 @@ class Settings:
     preset: str = "profile"
     seed: int = 0
     bins_m: tuple[tuple[float, float], ...] = DEFAULT_BINS_M
+    renderer: str = "pybullet"
+    scene_path: str | None = None
+    scene_camera: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """Plain mapping for JSON."""
         return {"views": self.views, "supersample": self.supersample, "scene_supersample": self.scene_supersample,
                 "distances_m": list(self.distances_m), "span": self.span,
                 "scenes": {name: list(ds) for name, ds in self.scenes}, "preset": self.preset, "seed": self.seed,
-                "bins_m": [list(b) for b in self.bins_m]}
+                "bins_m": [list(b) for b in self.bins_m], "renderer": self.renderer,
+                **({"world": self.scene_path, "world_camera": self.scene_camera} if self.scene_path else {})}
 
 
 #: Default settings (two profiles: about 2-3x the CPU time of QUICK; the README gives measured figures).

@@ -104,7 +104,9 @@ def summary_lines(result: ValidationResult) -> list[str]:
     """The run as terminal lines: parameters, projection, resolution, recovery, depth, edits, verdict."""
     names = " vs ".join(f"{p.name} ({role})" for role, p in result.roles.items())
     s = result.settings
-    lines = [f"s2r validate: {names}  [{s.views} views at {s.supersample}x, scenes at {s.scene_supersample}x, "
+    drawn = "" if s.renderer == "pybullet" and not s.scene_path else f"rendered by {s.renderer}" + (
+        f" in {s.scene_path}" if s.scene_path else "") + ", "
+    lines = [f"s2r validate: {names}  [{drawn}{s.views} views at {s.supersample}x, scenes at {s.scene_supersample}x, "
              f"preset {s.preset}, seed {s.seed}]"]
     if result.pair:
         lines += ["Parameters:", *_param_lines(result.params)]
@@ -124,5 +126,6 @@ def summary_lines(result: ValidationResult) -> list[str]:
     xml = [e for e in result.edits if e.parameter == "sensor XML"]
     if xml:
         lines.append(f"  where to write each edit: --report, --json; every edit at once: {xml[0].where}")
+    lines += [f"  MuJoCo: {e.where}" for e in result.edits if e.parameter == "MJCF cameras"]
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
     return [*lines, f"({timing})"]

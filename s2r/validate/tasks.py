@@ -80,7 +80,8 @@ def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances
           progress: ProgressCallback | None = None) -> Any:
     if kind == "recovery":
         return recover_calibration(profile, tol, views=settings.views, supersample=settings.supersample,
-                                   seed=settings.seed, jobs=1, progress=progress)
+                                   seed=settings.seed, jobs=1, progress=progress, renderer=settings.renderer,
+                                   scene_path=settings.scene_path, scene_camera=settings.scene_camera)
     # validate() already warned about this preset's range (check_distances): do not print it a second time
     presets_log = logging.getLogger("s2r.depth.presets")
     level = presets_log.level
@@ -88,7 +89,8 @@ def _task(kind: str, profile: StereoProfile, settings: Settings, tol: Tolerances
     try:
         return measure_depth_accuracy(profile, preset=settings.preset, scenes=settings.scenes,
                                       bins=settings.bins_m, supersample=settings.scene_supersample,
-                                      seed=settings.seed, jobs=1, progress=progress)
+                                      seed=settings.seed, jobs=1, progress=progress, renderer=settings.renderer,
+                                      scene_path=settings.scene_path, scene_camera=settings.scene_camera)
     finally:
         presets_log.setLevel(level)
 
