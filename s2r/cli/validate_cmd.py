@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import logging
 import shlex
 import sys
 from typing import Any
@@ -25,6 +26,8 @@ from s2r.errors import ValidateError
 from s2r.fileio import prepare_output_dir
 
 __all__ = ["register"]
+
+logger = logging.getLogger(__name__)
 
 
 def register(sub: Any) -> None:
@@ -82,7 +85,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     if args.seed < 0:  # numpy's generators take non-negative seeds only (was an internal error)
         raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)
-    sim = load_profile(args.sim)
+    sim = _load_sim(args.sim)
     if args.sensor_model is not None:
         from s2r.sensor.files import load_sensor_model
 
@@ -136,6 +139,21 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         path = write_validation_report(result, args.report, force=True)
         print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
     return 0 if result.passed else 1
+
+
+def _load_sim(name_or_path: str) -> Any:
+    """The SIM profile: a profile name or file, or a robot description (URDF / xacro / SDF / MJCF) read as
+    ``s2r profile from-description FILE`` would with its defaults, so ``validate cameras.xml real.yaml`` works."""
+    from s2r.formats.detect import is_robot_description
+
+    if not is_robot_description(name_or_path):
+        return load_profile(name_or_path)
+    from s2r.sources.profile_builder import load_description_profile
+
+    profile = load_description_profile(name_or_path)
+    logger.warning("%s: a robot description: SIM is the profile s2r profile from-description derives from it "
+                   "(%s convention)", name_or_path, profile.provenance.convention)
+    return profile
 
 
 _ORIGIN_WORDS = {"sim": "a simulated camera (from a robot description)", "real": "a calibrated real camera",

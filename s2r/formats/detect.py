@@ -24,7 +24,8 @@ from s2r.formats.zed import is_zed_conf, load_zed
 from s2r.geometry import baseline_layout_problem
 from s2r.profile import StereoProfile
 
-__all__ = ["FORMAT_NAMES", "Format", "check_layout", "detect_format", "load_any", "swap_cameras",
+__all__ = ["FORMAT_NAMES", "Format", "check_layout", "detect_format", "is_robot_description", "load_any",
+           "swap_cameras",
            "warn_implausible_baseline"]
 
 log = logging.getLogger(__name__)
@@ -115,6 +116,17 @@ def _is_kalibr_text(text: str, path: Path) -> bool:
     except FormatError:
         return False
     return is_kalibr_mapping(data)
+
+
+def is_robot_description(path: str | Path) -> bool:
+    """True when ``path`` is a readable URDF, xacro, SDF or MJCF file (a sim camera's source, not a profile)."""
+    source = Path(path)
+    if not source.is_file():
+        return False
+    try:
+        return _is_robot_description(source, read_text(source))
+    except FormatError:
+        return False
 
 
 def _is_robot_description(path: Path, text: str) -> bool:

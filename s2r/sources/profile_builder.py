@@ -236,17 +236,6 @@ def _mjcf_convention(description: Description, convention: str | None) -> str:
     return "exact"
 
 
-def _resolve_convention(description: Description, convention: str | None) -> str:
-    """``convention`` or the description's default: MuJoCo renders in ``exact`` and only that is accepted for it."""
-    if description.kind != "mjcf":
-        return convention or "gazebo-classic"
-    if convention not in (None, "exact"):
-        raise SourceError(f"--convention {convention} describes Gazebo's published camera_info; MuJoCo renders the "
-                          "exact pinhole (optical axis at (W - 1) / 2 - principal offset)", path=description.path,
-                          field="--convention", hint="leave --convention out (or pass exact) for an MJCF model")
-    return "exact"
-
-
 def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
     """Refuse (or, when ``allow``, warn about) what lint reports about the pair's baseline; warn on offsets."""
     from s2r.sources.lint_geometry import baseline_findings  # local: lint_geometry builds profiles itself

@@ -160,8 +160,12 @@ def _own_causes(failed: dict[str, ParamRow], pp_edit: bool) -> dict[str, list[st
 
 
 def _fb_cause(causes: dict[str, list[str]], sim: StereoProfile | None, real: StereoProfile | None) -> str:
-    """The cause that changes ``fx * B`` most (``focal`` or ``baseline``), else ``depth``."""
+    """The cause that changes ``fx * B`` most (``focal`` or ``baseline``); else ``lens`` when the lenses differ
+    (rectifying a distorted image rescales it, which changes the rectified focal length, the matcher's range and
+    the fill rate); else ``depth``."""
     candidates = [k for k in ("focal", "baseline", "resolution") if k in causes]
+    if not candidates and "lens" in causes:
+        return "lens"
     if not candidates or sim is None or real is None:
         return "depth"
     weight = {"focal": abs(math.log(sim.left.fx_px / real.left.fx_px)),

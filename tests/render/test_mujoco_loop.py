@@ -112,3 +112,29 @@ def test_exported_real_profile_round_trip(tmp_path: Path) -> None:
     got = _calibrate(tmp_path, '  <include file="cams.xml"/>', "s2r_stereo_left", "s2r_stereo_right")
     expected = tuple((c.fx_px, c.fy_px, c.cx_px, c.cy_px) for c in (real.left, real.right))
     _check(got, (expected[0], expected[1], real.baseline_m, real.R))
+
+
+def test_validate_takes_the_exported_mjcf_and_fails_only_the_lens(tmp_path: Path,
+                                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 20's loop: ``s2r validate cameras.xml real.yaml --renderer mujoco`` reads the MJCF as the sim (as
+    from-description would) and fails only on what MJCF cannot hold, naming the export and its residual."""
+    import json
+
+    from s2r.formats.s2r_yaml import dump_profile
+    from tests.conftest import make_rig
+
+    real = make_rig(name="lensed", width=320, height=240, hfov_rad=1.1, baseline_m=0.06, cx=171.3, cy=113.8,
+                    distortion=(-0.12, 0.03, 0.0, 0.0, 0.0), origin="real")
+    real_path = dump_profile(real, tmp_path / "real.yaml")
+    cameras = tmp_path / "cameras.xml"
+    assert main(["-q", "profile", "export-mujoco", str(real_path), "-o", str(cameras)]) == 0
+    capsys.readouterr()
+    code = main(["-q", "validate", str(cameras), str(real_path), "--quick", "--renderer", "mujoco", "--json",
+                 "--jobs", "1"])
+    result = json.loads(capsys.readouterr().out)
+    failed = [c["name"] for c in result["checks"] if not c["passed"]]
+    assert code == 1 and {"left distortion", "right distortion"} <= set(failed), failed
+    # one root cause explains every failure (the depth gaps too: rectifying a distorted image rescales it)
+    assert [cause["title"] for cause in result["root_causes"]] == ["Lens distortion"]
+    assert set(failed) == set(result["root_causes"][0]["checks"])
+    assert "export-mujoco" in json.dumps(result)  # the export that writes the pair, and its lens residual
