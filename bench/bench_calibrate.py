@@ -1,7 +1,7 @@
 """Benchmark `s2r calibrate` against a plain sequential OpenCV loop, side by side in one run.
 
 Data: 100 synthetic 1280x720 stereo pairs (80 with a 9x6 board, 20 without), made by warping a board
-texture through a known rig (s2r.calib.synth), cached under $TMPDIR/s2r_bench_calibrate.
+texture through a known rig (s2r.calib.solve.synth), cached under $TMPDIR/s2r_bench_calibrate.
 
 Plain OpenCV: for each image findChessboardCorners (the stereo_calib sample's flags ADAPTIVE_THRESH |
 NORMALIZE_IMAGE, and a second run adding FAST_CHECK) + cornerSubPix 11x11 at full resolution; then
@@ -40,7 +40,7 @@ import numpy as np
 
 from s2r.calib import calibrate_stereo
 from s2r.calib.detect import DetectItem, detect_stream
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, StereoProfile
 
 PATTERN, SQUARE = (9, 6), 0.025

@@ -14,7 +14,7 @@ from s2r.fileio import check_output_free, prepare_output_dir
 __all__ = ["register"]
 
 EXIT_OK = 0
-#: s2r.calib.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+#: s2r.calib.solve.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
 DEFAULT_LENS = "k1k2p1p2"
 
 
@@ -128,23 +128,23 @@ def run(args: argparse.Namespace) -> int:
     if target is not None:
         result = _run_target(args, target, lens, common)
     elif args.mono:
-        from s2r.calib.inputs import find_mono_images
-        from s2r.calib.mono import calibrate_mono
+        from s2r.calib.detect.inputs import find_mono_images
+        from s2r.calib.solve.mono import calibrate_mono
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
                                    hint="export the images to a folder first")
         result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
     elif args.bag is not None:
-        from s2r.calib.bags import calibrate_stereo_bag
+        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
         result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
                                       max_dt_s=args.max_dt, every=args.every,
                                       fix_intrinsics=args.fix_intrinsics, swap=args.swap,
                                       **common)
     else:
-        from s2r.calib.inputs import find_stereo_pairs
-        from s2r.calib.stereo import calibrate_stereo
+        from s2r.calib.detect.inputs import find_stereo_pairs
+        from s2r.calib.solve.stereo import calibrate_stereo
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
         result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
@@ -173,21 +173,21 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
     kw.update(target=target, lens=lens,
               distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
     if args.mono:
-        from s2r.calib.inputs import find_mono_images
-        from s2r.calib.target_stereo import calibrate_mono_target
+        from s2r.calib.detect.inputs import find_mono_images
+        from s2r.calib.solve.target_stereo import calibrate_mono_target
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
                                    hint="export the images to a folder first")
         return calibrate_mono_target(find_mono_images(args.input, image_glob=args.left), **kw)
     if args.bag is not None:
-        from s2r.calib.bags import calibrate_stereo_bag
+        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
         return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
                                     max_dt_s=args.max_dt, every=args.every, fix_intrinsics=args.fix_intrinsics,
                                     swap=args.swap, **common, target=target, lens=lens)
-    from s2r.calib.inputs import find_stereo_pairs
-    from s2r.calib.target_stereo import calibrate_stereo_target
+    from s2r.calib.detect.inputs import find_stereo_pairs
+    from s2r.calib.solve.target_stereo import calibrate_stereo_target
 
     pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
     return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,

@@ -67,7 +67,7 @@ def compare_recording(sim: StereoProfile, real: StereoProfile, folder: str | Pat
                       square_m: float, preset: str, tol: Tolerances, seed: int = 0,
                       progress: ProgressCallback | None = None) -> RecordingComparison:
     """Measure REAL on the recording in ``folder`` and SIM on the same boards at the same poses (module docstring)."""
-    from s2r.calib.inputs import find_stereo_pairs
+    from s2r.calib.detect.inputs import find_stereo_pairs
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.inputs import FramePaths
     from s2r.quality.views import stereo_fb, stereo_views, stereo_visible_m

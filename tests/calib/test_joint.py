@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import Detection
-from s2r.calib.joint import JointInit, solve_joint
-from s2r.calib.lens import LENS_MODELS
-from s2r.calib.observations import BoardObservation, StereoObservation, chessboard_observation
-from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.joint import JointInit, solve_joint
+from s2r.calib.solve.lens import LENS_MODELS
+from s2r.calib.solve.observations import BoardObservation, StereoObservation, chessboard_observation
+from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 

@@ -21,10 +21,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.mono import MonoCalibration
-from s2r.calib.report_plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
-from s2r.calib.stereo import StereoCalibration
-from s2r.calib.synth import board_object_points
+from s2r.calib.report.plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
+from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.stereo import StereoCalibration
+from s2r.calib.solve.synth import board_object_points
 from s2r.htmlreport import ReportSection, figure_to_data_uri, html_table, image_to_data_uri, write_report
 from s2r.profile import Camera
 from s2r.rectification import stereo_rectification

@@ -13,14 +13,14 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.lens import DEFAULT_LENS, lens_model
-from s2r.calib.models import ModelComparison, compare_models
-from s2r.calib.pair import PairSolution, solve_pair
-from s2r.calib.synth import board_object_points
-from s2r.calib.verdict import Verdict, stereo_verdict
-from s2r.calib.views import (
+from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.solve.lens import DEFAULT_LENS, lens_model
+from s2r.calib.solve.models import ModelComparison, compare_models
+from s2r.calib.solve.pair import PairSolution, solve_pair
+from s2r.calib.solve.synth import board_object_points
+from s2r.calib.solve.verdict import Verdict, stereo_verdict
+from s2r.calib.solve.views import (
     MIN_VIEWS,
     check_sizes,
     no_board_error,
@@ -299,11 +299,11 @@ def calibrate_stereo(
 
     Args:
         pattern: inner corners ``(cols, rows)``; square_m: square size in metres.
-        distortion: a :data:`s2r.calib.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
+        distortion: a :data:`s2r.calib.solve.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
         fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
         swap: exchange the left and right images (when the check finds the right camera to the left).
-        compare: score every lens model on held-out views (:func:`s2r.calib.models.compare_models`).
+        compare: score every lens model on held-out views (:func:`s2r.calib.solve.models.compare_models`).
         jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
         names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
 

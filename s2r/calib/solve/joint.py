@@ -26,8 +26,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.lens import LensModel
-from s2r.calib.observations import BoardObservation, StereoObservation
+from s2r.calib.solve.lens import LensModel
+from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.errors import CalibrationError
 
 __all__ = ["JointInit", "JointSolution", "solve_joint"]
