@@ -27,8 +27,10 @@ def register(sub: Any) -> None:
     p.add_argument("input", nargs="?", type=Path,
                    help="folder with left/ and right/ (or cam0/ cam1/, image_0/ image_1/) subfolders, or "
                         "with leftNN/rightNN image files")
-    p.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6)")
-    p.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
+    p.add_argument("--pattern", default=None,
+                   help="chessboard inner corners COLSxROWS, e.g. 9x6 (required unless --target)")
+    p.add_argument("--square", type=float, default=None,
+                   help="square edge in metres, e.g. 0.025 (required unless --target: every length scales with it)")
     p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
@@ -81,7 +83,26 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
     return lens, None
 
 
+def _required_board(args: argparse.Namespace) -> None:
+    """No silent board: a chessboard needs ``--square`` and ``--pattern`` (a ``--target`` file has both)."""
+    if args.target is not None:
+        return
+    if args.square is None:
+        raise CalibrationError("the square size is required: every length (baseline, board distance) scales with "
+                               "it", field="--square", hint="measure one square edge of the printed board, e.g. "
+                                                            "--square 0.025 for 25 mm (or describe it with --target)")
+    if args.pattern is None:
+        raise CalibrationError("the chessboard is required", field="--pattern",
+                               hint="give its inner corners COLSxROWS, e.g. --pattern 9x6 for a board of 10x7 "
+                                    "squares (or describe the board with --target FILE)")
+
+
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
+    _required_board(args)
+    if args.target is not None and args.pattern is None:
+        args.pattern = "9x6"  # unused: the target file describes the board
+    if args.target is not None and args.square is None:
+        args.square = 0.025  # unused: the target file gives its spacing
     try:
         pattern = parse_pattern(args.pattern)
     except ValueError as exc:

@@ -15,7 +15,7 @@ from tests.calib.conftest import copy_pairs
 
 
 def _run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(["calibrate", *args, "--jobs", "1"])
+    code = main(["calibrate", "--pattern", "9x6", "--square", "0.025", *args, "--jobs", "1"])
     out, err = capsys.readouterr()
     return code, out, err
 
@@ -78,7 +78,8 @@ def test_too_few_pairs_says_how_many_and_why(small_set: Path, tmp_path: Path,
 def test_wrong_pattern_suggests_checking_inner_corners(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
     folder = copy_pairs(synthetic_set[0], tmp_path / "set", range(3))  # OpenCV needs ~1 s per image here
-    code = main(["calibrate", str(folder), "-o", str(tmp_path / "out.yaml"), "--pattern", "10x7", "--jobs", "2"])
+    code = main(["calibrate", str(folder), "-o", str(tmp_path / "out.yaml"), "--pattern", "10x7", "--square", "0.025",
+                 "--jobs", "2"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
     assert "--pattern" in err and "INNER corners" in err and "no 10x7 chessboard found" in err
@@ -108,3 +109,13 @@ def test_glob_matching_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str
     code, _, err = _run(capsys, "--left", str(tmp_path / "*.png"), "--right", str(tmp_path / "r*.png"),
                         "-o", str(tmp_path / "out.yaml"))
     assert code == 2 and "--left glob matches no image files" in err
+
+
+@pytest.mark.parametrize(("args", "named"), [(["--pattern", "9x6"], "--square"), ([], "--square"),
+                                             (["--square", "0.025"], "--pattern")])
+def test_no_silent_board(small_set: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str],
+                         named: str) -> None:
+    out = tmp_path / "out.yaml"
+    code = main(["calibrate", str(small_set), "-o", str(out), *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and named in err and len(err.splitlines()) == 1 and not out.exists()

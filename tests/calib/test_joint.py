@@ -136,7 +136,7 @@ def test_model_comparison_marks_the_chosen_model_and_warns_without_switching() -
     res = _calibrate(make_rig(61, views=12, tangential_max=3e-3), distortion="k1k2", compare=True)
     assert res.models is not None and [s.model for s in res.models.scores if s.chosen] == ["k1k2"]
     assert res.models.best in ("k1k2p1p2", "plumb_bob", "rational")
-    assert any("held-out views favour --distortion" in w for w in res.warnings)
+    assert any("held-out pairs favour --distortion" in w for w in res.warnings)
     assert res.profile.provenance.calibration is not None
     assert res.profile.provenance.calibration.distortion_terms == "k1k2"  # no silent switching
     figures = res.figures()["model_comparison"]

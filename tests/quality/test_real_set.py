@@ -11,13 +11,16 @@ import pytest
 from s2r.cli import main
 from tests.conftest import shared_data
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 pytestmark = pytest.mark.slow
 
 
 def test_real_set_depth_on_the_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     data = shared_data("opencv_stereo_chessboard")
     profile = tmp_path / "real.yaml"
-    assert main(["-q", "calibrate", str(data), "-o", str(profile), "--jobs", "2", "--json"]) == 0
+    assert main(["-q", "calibrate", *BOARD, str(data), "-o", str(profile), "--jobs", "2", "--json"]) == 0
     capsys.readouterr()
     code = main(["-q", "depth-quality", str(profile), "--left", str(data / "left0[678].jpg"), "--right",
                  str(data / "right0[678].jpg"), "--pattern", "9x6", "--square", "0.025", "--num-disparities", "256",

@@ -6,7 +6,10 @@ does) and the corners refined at full resolution. The classic detector
 (``findChessboardCorners`` with ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK) runs first (on large
 images also at full resolution, for steeply tilted boards), the sector-based ``findChessboardCornersSB``
 (NORMALIZE_IMAGE) is the fallback, on images larger than 640x480 only when OpenCV's quick check
-(``checkChessboard``) finds a board likely, so frames without a board cost about one FAST_CHECK call.
+(``checkChessboard``) finds a board likely. FAST_CHECK and ``checkChessboard`` are only a first pass: they
+miss boards plain ``findChessboardCorners`` finds (on real sets 1-8 % of the views), so an image they reject is
+tried again at full resolution without them (ADAPTIVE_THRESH | NORMALIZE_IMAGE, as OpenCV's stereo sample)
+before it is called board-less; frames without a board cost that extra call.
 ``cornerSubPix`` uses a window fitted to the board: 0.4 x the smallest distance between neighbouring
 corners, clamped to 2..11 px (half-size), instead of a fixed 11x11 (half-size) window that would swallow
 neighbouring corners of small or distant boards.
@@ -31,6 +34,8 @@ _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | c
 #: Without EXHAUSTIVE: that flag finds a few more strongly tilted boards but costs about 0.2 s on every
 #: 640x360 image without a board (0.03-0.05 s without it), which dominates long recordings.
 _SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE
+#: The retry of views the first pass rejects: plain findChessboardCorners, no FAST_CHECK.
+_PLAIN_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 Corners = NDArray[np.float32]
@@ -49,8 +54,8 @@ def refine_window(corners: Corners, pattern: tuple[int, int]) -> int:
     return int(min(11, max(2, math.floor(0.4 * min_dist))))
 
 
-def _classic(image: NDArray[np.uint8], pattern: tuple[int, int]) -> Corners | None:
-    ok, corners = cv2.findChessboardCorners(image, pattern, flags=_CLASSIC_FLAGS)
+def _classic(image: NDArray[np.uint8], pattern: tuple[int, int], flags: int = _CLASSIC_FLAGS) -> Corners | None:
+    ok, corners = cv2.findChessboardCorners(image, pattern, flags=flags)
     return np.asarray(corners, np.float32).reshape(-1, 2) if ok else None
 
 
@@ -74,7 +79,8 @@ def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | 
     sector-based detector on the (downscaled) image; for images larger than 640x480 only when OpenCV's quick
     check (``checkChessboard``) says a board is likely, which keeps it (tens of ms) off frames without a
     board. The check misses some boards only the sector-based detector finds (on the 640x480 test set 3 of
-    4), so small images, which are cheap, always get the fallback.
+    4), so small images, which are cheap, always get the fallback. Last, plain ``findChessboardCorners``
+    without FAST_CHECK at full resolution: a board any of the checks above rejected is not lost.
     """
     h, w = gray.shape[:2]
     factor = math.ceil(math.sqrt(w * h / DETECT_AREA_PX) - 1e-9)
@@ -90,12 +96,12 @@ def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | 
     found = _classic(gray, pattern)
     if found is not None:
         return found, "classic" if factor <= 2 else "classic-full"
-    if factor > 1 and not _board_likely(small, pattern):
-        return None, ""
-    found = _sector_based(small, pattern)
-    if found is not None:
-        return ((found + 0.5) * factor - 0.5).astype(np.float32) if factor > 1 else found, "sb"
-    return None, ""
+    if factor == 1 or _board_likely(small, pattern):
+        found = _sector_based(small, pattern)
+        if found is not None:
+            return ((found + 0.5) * factor - 0.5).astype(np.float32) if factor > 1 else found, "sb"
+    found = _classic(gray, pattern, _PLAIN_FLAGS)  # the first pass is no verdict: retry without FAST_CHECK
+    return (found, "classic-plain") if found is not None else (None, "")
 
 
 def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:

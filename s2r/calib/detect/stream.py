@@ -55,10 +55,11 @@ __all__ = [
     "DetectItem",
     "Detection",
     "detect_stream",
+    "process_pool",
 ]
 
 #: Bumped whenever detection changes so stale cache entries are ignored.
-DETECTOR_VERSION = 6
+DETECTOR_VERSION = 7
 
 Status = Literal["ok", "no_board", "unreadable"]
 Corners = NDArray[np.float32]
@@ -69,8 +70,8 @@ class Detection:
     """Detection result of one image.
 
     ``size`` is ``(width, height)`` in pixels (None when unreadable); ``corners`` (N, 2) float32 pixels
-    when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"`` or ``"sb"``; ``detail`` says
-    why it failed. ``ids`` (N,) int32 are the target's corner ids of ``corners`` when a file-described
+    when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"``, ``"sb"`` or ``"classic-plain"``;
+    ``detail`` says why it failed. ``ids`` (N,) int32 are the target's corner ids of ``corners`` when a file-described
     target (``--target``) was detected; None for a ``--pattern`` chessboard (all corners, row-major).
     """
 
@@ -205,6 +206,12 @@ def _executor(jobs: int) -> ProcessPoolExecutor:
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
     return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
                                initargs=(os.getpid(),))
+
+
+def process_pool(jobs: int) -> ProcessPoolExecutor:
+    """s2r's one process pool (the detection workers' kind: forked, ended with the parent), for other
+    parallel work such as the calibration's resampling solves; the caller shuts it down."""
+    return _executor(jobs)
 
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.lens import LensModel
-from s2r.calib.solve.observations import BoardObservation, StereoObservation
+from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError
 
 __all__ = ["JointInit", "JointSolution", "solve_joint"]
@@ -132,89 +132,158 @@ class _State:
         return [r.copy() for r in self.rv], [t.copy() for t in self.tv]
 
 
-def _camera_terms(state: _State, cam: int, obs: BoardObservation, mask: NDArray[np.bool_], k: int
+_Masks = list[list[NDArray[np.bool_] | None]]
+#: Per active view (in ``active`` order): A_gv (n, ng, 6), A_vv (n, 6, 6), b_v (n, 6).
+_Blocks = tuple[FloatArray, FloatArray, FloatArray]
+
+
+@dataclass(frozen=True)
+class _Corners:
+    """One camera's (inlier) corners of the active views, concatenated view by view: board points (M, 3) m,
+    pixels (M, 2), each corner's view (position in ``active``) and its place within that view."""
+
+    obj: FloatArray
+    img: FloatArray
+    seg: NDArray[np.intp]
+    pos: NDArray[np.intp]
+    width: int
+
+
+def _gather(views: Sequence[StereoObservation], masks: _Masks | None, active: Sequence[int], cam: int
+            ) -> _Corners | None:
+    """The corners of one camera (all of them when ``masks`` is None), or None when it saw none."""
+    objs, imgs, seg = [], [], []
+    for j, k in enumerate(active):
+        obs = views[k].left if cam == 0 else views[k].right
+        mask = None if obs is None else (np.ones(len(obs.ids), bool) if masks is None else masks[k][cam])
+        if obs is None or mask is None or not mask.any():
+            continue
+        objs.append(obs.obj[mask])
+        imgs.append(obs.img[mask])
+        seg.append(np.full(int(mask.sum()), j, np.intp))
+    if not objs:
+        return None
+    segs = np.concatenate(seg)
+    starts = np.flatnonzero(np.r_[True, segs[1:] != segs[:-1]])
+    counts = np.diff(np.r_[starts, len(segs)])
+    pos = np.arange(len(segs)) - np.repeat(starts, counts)
+    return _Corners(np.concatenate(objs).astype(np.float64), np.concatenate(imgs).astype(np.float64), segs, pos,
+                    int(counts.max()))
+
+
+def _prepare(views: Sequence[StereoObservation], masks: _Masks | None, active: Sequence[int]
+             ) -> tuple[_Corners | None, _Corners | None]:
+    return _gather(views, masks, active, 0), _gather(views, masks, active, 1)
+
+
+def _rotations(rvecs: Sequence[FloatArray]) -> tuple[FloatArray, FloatArray]:
+    """Rotation matrices (n, 3, 3) and their derivatives (n, 3, 3, 3): ``dR[i, j]`` = dR_i / d r_j."""
+    Rs, dRs = [], []
+    for r in rvecs:
+        R, jac = cv2.Rodrigues(np.asarray(r, np.float64).reshape(3, 1))
+        Rs.append(R)
+        dRs.append(np.asarray(jac, np.float64).reshape(3, 3, 3))
+    return np.asarray(Rs, np.float64).reshape(-1, 3, 3), np.asarray(dRs, np.float64).reshape(-1, 3, 3, 3)
+
+
+def _camera_terms(state: _State, cam: int, c: _Corners, poses: tuple[FloatArray, FloatArray, FloatArray]
                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Residuals (2n,), global Jacobian (2n, ng) and view Jacobian (2n, 6) of one camera's inlier corners."""
+    """Residuals (M, 2) px, global Jacobian (M, 2, ng) and view Jacobian (M, 2, 6) of one camera's corners.
+
+    Board points go to the camera frame here (the view's pose, then the pair's for the right camera) and are
+    projected in one call with a zero pose, whose translation Jacobian is d pixel / d point. ``poses``: the
+    active views' rotations (n, 3, 3), their derivatives (n, 3, 3, 3) and translations (n, 3)."""
     ni = state.n_intr
     ng = 2 * ni + 6
-    proj = state.lens.projection
-    obj, img = obs.obj[mask], obs.img[mask]
+    m = len(c.obj)
+    R, dR, t = poses
+    X = (R[c.seg] @ c.obj[:, :, None])[:, :, 0] + t[c.seg]
+    dX_dr = (dR[c.seg].reshape(m, 9, 3) @ c.obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
+    Jg = np.zeros((m, 2, ng))
+    if cam == 1:
+        R_lr, dR_lr = _rotations([state.r_lr])
+        dX_drlr = (X @ dR_lr[0].reshape(9, 3).T).reshape(m, 3, 3).transpose(0, 2, 1)
+        X = X @ R_lr[0].T + state.t_lr
+        dX_dr = R_lr[0] @ dX_dr
+    pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
+    jac = jac.reshape(m, 2, -1)
+    dp_dX = jac[:, :, 3:6]
     cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
-    Jg = np.zeros((2 * len(obj), ng))
-    if cam == 0:
-        pts, jac = proj.project(obj, state.rv[k], state.tv[k], state.K[0], state.D[0])
-        Jg[:, :ni] = jac[:, cols]
-        Jv = jac[:, :6]
+    Jg[:, :, cam * ni:(cam + 1) * ni] = jac[:, :, cols]
+    if cam == 1:
+        Jg[:, :, 2 * ni:2 * ni + 3] = dp_dX @ dX_drlr
+        Jg[:, :, 2 * ni + 3:] = dp_dX
+        dp_dt = dp_dX @ R_lr[0]
     else:
-        r3, t3, dr3dr1, _, dr3dr2, _, dt3dr1, dt3dt1, dt3dr2, dt3dt2 = cv2.composeRT(
-            state.rv[k].reshape(3, 1), state.tv[k].reshape(3, 1), state.r_lr.reshape(3, 1), state.t_lr.reshape(3, 1))
-        pts, jac = proj.project(obj, np.asarray(r3, np.float64).reshape(3), np.asarray(t3, np.float64).reshape(3),
-                                state.K[1], state.D[1])
-        jr, jt = jac[:, 0:3], jac[:, 3:6]
-        Jg[:, ni:2 * ni] = jac[:, cols]
-        Jg[:, 2 * ni:2 * ni + 3] = jr @ dr3dr2 + jt @ dt3dr2
-        Jg[:, 2 * ni + 3:] = jt @ dt3dt2
-        Jv = np.hstack([jr @ dr3dr1 + jt @ dt3dr1, jt @ dt3dt1])
-    return (pts - img).reshape(-1), Jg, Jv
+        dp_dt = dp_dX
+    Jv = np.concatenate([dp_dX @ dX_dr, dp_dt], axis=2)
+    return pts.reshape(m, 2) - c.img, Jg, Jv
 
 
-_Masks = list[list[NDArray[np.bool_] | None]]
+def _padded(values: FloatArray, c: _Corners, n: int) -> FloatArray:
+    """(M, 2, k) per-corner rows into (n views, 2 * width, k), zero where a view has fewer corners."""
+    out = np.zeros((n, c.width, *values.shape[1:]))
+    out[c.seg, c.pos] = values
+    return out.reshape(n, 2 * c.width, -1)
 
 
-def _normal_equations(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int]
-                      ) -> tuple[float, int, FloatArray, FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
-    """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v)."""
+def _normal_equations(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int],
+                      data: tuple[_Corners | None, _Corners | None] | None = None
+                      ) -> tuple[float, int, FloatArray, FloatArray, _Blocks]:
+    """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v); ``data``: the gathered corners
+    (:func:`_prepare`) when the caller already has them."""
     ng = 2 * state.n_intr + 6
+    n = len(active)
     A, b = np.zeros((ng, ng)), np.zeros(ng)
-    blocks = []
-    ssr, m = 0.0, 0
-    for k in active:
-        Agv, Avv, bv = np.zeros((ng, 6)), np.zeros((6, 6)), np.zeros(6)
-        for cam, obs in enumerate((views[k].left, views[k].right)):
-            mask = masks[k][cam]
-            if obs is None or mask is None or not mask.any():
-                continue
-            r, Jg, Jv = _camera_terms(state, cam, obs, mask, k)
-            ssr += float(r @ r)
-            m += r.size
-            A += Jg.T @ Jg
-            b += Jg.T @ r
-            Agv += Jg.T @ Jv
-            Avv += Jv.T @ Jv
-            bv += Jv.T @ r
-        blocks.append((Agv, Avv, bv))
-    return ssr, m, A, b, blocks
+    Agv, Avv, bv = np.zeros((n, ng, 6)), np.zeros((n, 6, 6)), np.zeros((n, 6))
+    ssr, count = 0.0, 0
+    R, dR = _rotations([state.rv[k] for k in active])
+    poses = (R, dR, np.asarray([state.tv[k] for k in active], np.float64).reshape(-1, 3))
+    for cam, c in enumerate(data if data is not None else _prepare(views, masks, active)):
+        if c is None:
+            continue
+        r, Jg, Jv = _camera_terms(state, cam, c, poses)
+        ssr += float(np.sum(r * r))
+        count += r.size
+        Jg2 = Jg.reshape(-1, ng)
+        A += Jg2.T @ Jg2
+        b += Jg2.T @ r.reshape(-1)
+        Pg, Pv, Pr = _padded(Jg, c, n), _padded(Jv, c, n), _padded(r[:, :, None], c, n)
+        PvT = Pv.transpose(0, 2, 1)
+        Agv += Pg.transpose(0, 2, 1) @ Pv
+        Avv += PvT @ Pv
+        bv += (PvT @ Pr)[:, :, 0]
+    return ssr, count, A, b, (Agv, Avv, bv)
 
 
-def _step(A: FloatArray, b: FloatArray, blocks: list[tuple[FloatArray, FloatArray, FloatArray]], lam: float
-          ) -> tuple[FloatArray, list[FloatArray]]:
-    """Damped Gauss-Newton step (global, per view) with the view blocks eliminated."""
+def _step(A: FloatArray, b: FloatArray, blocks: _Blocks, lam: float) -> tuple[FloatArray, FloatArray]:
+    """Damped Gauss-Newton step (global (ng,), per view (n, 6)) with the view blocks eliminated."""
+    Agv, Avv, bv = blocks
     S = A + lam * np.diag(np.diag(A))
-    rhs = -b.copy()
-    inv = []
-    for Agv, Avv, bv in blocks:
-        Vi = np.linalg.inv(Avv + lam * np.diag(np.diag(Avv)) + 1e-12 * np.eye(6))
-        inv.append(Vi)
-        S -= Agv @ Vi @ Agv.T
-        rhs += Agv @ Vi @ bv
+    damp = lam * np.einsum("nii->ni", Avv)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
+    Vi = np.linalg.inv(Avv + damp)
+    AV = np.einsum("nij,njk->nik", Agv, Vi)
+    S -= np.einsum("nik,njk->ij", AV, Agv)
+    rhs = -b + np.einsum("nij,nj->i", AV, bv)
     dg = np.asarray(np.linalg.lstsq(S, rhs, rcond=None)[0], np.float64)
-    dv = [Vi @ (-bv - Agv.T @ dg) for Vi, (Agv, _, bv) in zip(inv, blocks, strict=True)]
+    dv = np.einsum("nij,nj->ni", Vi, -bv - np.einsum("nij,i->nj", Agv, dg))
     return dg, dv
 
 
 def _levenberg_marquardt(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int],
-                         iterations: int = 50) -> None:
+                         iterations: int = 50, rel_tol: float = 1e-10) -> None:
     lam = 1e-3
-    ssr, _, A, b, blocks = _normal_equations(state, views, masks, active)
+    data = _prepare(views, masks, active)
+    ssr, _, A, b, blocks = _normal_equations(state, views, masks, active, data)
     for _ in range(iterations):
         g0, (rv0, tv0) = state.global_vec(), state.copy_views()
         dg, dv = _step(A, b, blocks, lam)
         state.set_global(g0 + dg)
         for k, d in zip(active, dv, strict=True):
             state.rv[k], state.tv[k] = rv0[k] + d[:3], tv0[k] + d[3:]
-        new = _normal_equations(state, views, masks, active)
+        new = _normal_equations(state, views, masks, active, data)
         if np.isfinite(new[0]) and new[0] <= ssr:
-            converged = ssr - new[0] < 1e-10 * max(ssr, 1e-12)
+            converged = ssr - new[0] < rel_tol * max(ssr, 1e-12)
             ssr, _, A, b, blocks = new
             lam = max(lam / 10, 1e-9)
             if converged:
@@ -227,16 +296,19 @@ def _levenberg_marquardt(state: _State, views: Sequence[StereoObservation], mask
                 return
 
 
-def _residuals(state: _State, views: Sequence[StereoObservation], k: int
-               ) -> tuple[FloatArray | None, FloatArray | None]:
-    out: list[FloatArray | None] = []
-    for cam, obs in enumerate((views[k].left, views[k].right)):
-        if obs is None:
-            out.append(None)
+def _all_residuals(state: _State, views: Sequence[StereoObservation], ks: Sequence[int]
+                   ) -> dict[int, tuple[FloatArray | None, FloatArray | None]]:
+    """Residuals (N, 2) px of ALL corners of views ``ks`` per camera (None where a camera saw nothing)."""
+    out: dict[int, list[FloatArray | None]] = {k: [None, None] for k in ks}
+    R, dR = _rotations([state.rv[k] for k in ks])
+    poses = (R, dR, np.asarray([state.tv[k] for k in ks], np.float64).reshape(-1, 3))
+    for cam, c in enumerate(_prepare(views, None, ks)):
+        if c is None:
             continue
-        r, _, _ = _camera_terms(state, cam, obs, np.ones(len(obs.ids), bool), k)
-        out.append(r.reshape(-1, 2))
-    return out[0], out[1]
+        r, _, _ = _camera_terms(state, cam, c, poses)
+        for j in np.unique(c.seg):
+            out[ks[int(j)]][cam] = r[c.seg == j]
+    return {k: (v[0], v[1]) for k, v in out.items()}
 
 
 def _robust_threshold(values: FloatArray, k_mad: float = 5.0, k_median: float = 2.0, floor: float = 0.3) -> float:
@@ -251,7 +323,7 @@ def _reject(state: _State, views: Sequence[StereoObservation], masks: _Masks, ac
 
     A view's RMS is over the inlier corners of both cameras; the threshold is ``max_view_error_px`` or a
     robust one (median + 5 MAD-sigmas, at least 2x the median and 0.3 px) fixed at the first round."""
-    res = {k: _residuals(state, views, k) for k in active}
+    res = _all_residuals(state, views, active)
     comps = np.concatenate([np.abs(r[masks[k][c]]).reshape(-1) for k in active for c, r in enumerate(res[k])
                             if r is not None and masks[k][c] is not None])
     sigma = float(np.median(comps)) / 0.6745 if comps.size else 0.0  # median |x| = 0.6745 sigma
@@ -284,9 +356,8 @@ def _reject(state: _State, views: Sequence[StereoObservation], masks: _Masks, ac
 def _covariance(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int],
                 names: list[str]) -> tuple[FloatArray, tuple[str, ...], float]:
     ssr, m, A, _, blocks = _normal_equations(state, views, masks, active)
-    S = A.copy()
-    for Agv, Avv, _ in blocks:
-        S -= Agv @ np.linalg.pinv(Avv) @ Agv.T
+    Agv, Avv, _ = blocks
+    S = A - np.einsum("nij,njk,nlk->il", Agv, np.linalg.pinv(Avv), Agv)
     p = len(names) + 6 * len(active)
     sigma2 = ssr / max(1, m - p)
     scale = 1.0 / np.sqrt(np.maximum(np.diag(S), 1e-300))
@@ -312,9 +383,11 @@ def _names(lens: LensModel) -> list[str]:
 
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
-                max_view_error_px: float | None = None) -> JointSolution:
+                max_view_error_px: float | None = None, rel_tol: float = 1e-10) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
+    ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
+    from the full solution, use a looser one).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -327,13 +400,13 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     active = list(range(len(views)))
     view_thr: float | None = None
     for _ in range(max_rounds):
-        _levenberg_marquardt(state, views, masks, active)
+        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
         changed, view_thr = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
                                     corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
         if not changed:
             break
     else:
-        _levenberg_marquardt(state, views, masks, active)
+        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
     if not np.all(np.isfinite(state.global_vec())):
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")
@@ -343,8 +416,9 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     residuals = []
     sq, n = 0.0, 0
     dropped = 0
+    every = _all_residuals(state, views, list(range(len(views))))
     for k in range(len(views)):
-        res = _residuals(state, views, k)
+        res = every[k]
         residuals.append(res)
         for c, r in enumerate(res):
             mask = masks[k][c]

@@ -15,8 +15,9 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
-from s2r.calib.solve.lens import DEFAULT_LENS, lens_model
-from s2r.calib.solve.models import ModelComparison, compare_models
+from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
+from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
+from s2r.calib.solve.models import ModelComparison
 from s2r.calib.solve.pair import PairSolution, solve_pair
 from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
@@ -44,7 +45,8 @@ from s2r.profile import (
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 
-__all__ = ["StereoCalibration", "ViewError", "calibrate_stereo", "calibrate_stereo_detections", "make_camera"]
+__all__ = ["StereoCalibration", "ViewError", "board_text", "calibrate_stereo", "calibrate_stereo_detections",
+           "make_camera"]
 
 log = logging.getLogger(__name__)
 Corners = NDArray[np.float32]
@@ -93,6 +95,8 @@ class StereoCalibration:
     models: ModelComparison | None = None
     verdict: Verdict | None = None
     view_paths: dict[str, tuple[Path, Path]] = field(default_factory=dict, repr=False)
+    heldout: StereoHeldout | None = None
+    board: str = ""
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -118,6 +122,8 @@ class StereoCalibration:
             else self.solution.rotation_std_deg,
             "unobservable": [] if self.solution is None else list(self.solution.unobservable),
             "model_comparison": None if self.models is None else self.models.as_dict(),
+            "board": self.board,
+            "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
         }
 
 
@@ -185,9 +191,10 @@ def calibrate_stereo_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, pattern: tuple[int, int], square_m: float, name: str,
     distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
     swap: bool = False, sources: Sequence[SourceFile] = (), extra_dropped: Sequence[DroppedView] = (),
-    sample_paths: tuple[Path, Path] | None = None, compare: bool = True,
+    sample_paths: tuple[Path, Path] | None = None, compare: bool = True, jobs: int | None = None,
 ) -> StereoCalibration:
-    """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`."""
+    """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`
+    (``jobs``: processes of the resampling solves, default all cores)."""
     if swap:
         pairs = [(n, dr, dl) for n, dl, dr in pairs]
     size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
@@ -208,6 +215,10 @@ def calibrate_stereo_detections(
                      fix_intrinsics=fix_intrinsics, square_m=square_m)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
+    held, models = stereo_heldout([views.names[k] for k in keep], pl, pr, obj, sol, lens=lens_model(distortion),
+                                  compare=tuple(LENS_MODELS) if compare else (), max_error_px=max_error_px,
+                                  jobs=jobs or os.cpu_count() or 1)
+    sol = _with_reported_std(sol, held)
     dropped += [DroppedView(name=views.names[selected[i]], reason=why) for i, why in sol.mismatched]
     outliers = [ViewError(views.names[selected[i]], a, b, c, used=False, reason=why)
                 for i, a, b, c, why in sol.outliers]
@@ -221,14 +232,12 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    models = compare_models(pl, pr, obj, size, chosen=distortion, guess=((sol.K1, sol.D1), (sol.K2, sol.D2))) \
-        if compare else None
     warnings = [*([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
-    heldout = None if models is None else next(m.heldout_px for m in models.scores if m.chosen)
+    heldout = None if held is None else held.heldout_px
     verdict = stereo_verdict(
         rms_px=sol.rms_px, heldout_px=heldout, epipolar_px=float("nan") if epi is None else epi,
         baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
@@ -243,7 +252,28 @@ def calibrate_stereo_detections(
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
-        verdict=verdict)
+        verdict=verdict, heldout=held, board=board_text(pattern, square_m))
+
+
+def board_text(pattern: tuple[int, int], square_m: float) -> str:
+    """The chessboard used, in words (the summary and the report state it: every length scales with it)."""
+    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {square_m * 1000:g} mm squares"
+
+
+def _with_reported_std(sol: PairSolution, held: StereoHeldout | None) -> PairSolution:
+    """``sol`` with each std of the resampled parameters replaced by the larger of covariance and jackknife."""
+    if held is None:
+        return sol
+    left, right = sol.std_left.copy(), sol.std_right.copy()
+    for i, name in enumerate(("fx", "fy", "cx", "cy")):
+        for side, arr in (("left", left), ("right", right)):
+            value = held.std(f"{side} {name}").reported
+            if value is not None and np.isfinite(arr[i]):
+                arr[i] = value
+    b, r = held.std("baseline").reported, held.std("rotation").reported
+    return replace(sol, std_left=left, std_right=right,
+                   baseline_std_m=b if b is not None and np.isfinite(sol.baseline_std_m) else sol.baseline_std_m,
+                   rotation_std_deg=r if r is not None and np.isfinite(sol.rotation_std_deg) else sol.rotation_std_deg)
 
 
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
@@ -329,7 +359,7 @@ def calibrate_stereo(
     report(progress, 0, 1, "solving")
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare)
+        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare, jobs=jobs)
     report(progress, 1, 1, "solving")
     first = result.used_names[0]
     idx = [n for n, _, _ in pairs].index(first)
