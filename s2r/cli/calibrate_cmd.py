@@ -176,11 +176,18 @@ def run(args: argparse.Namespace) -> int:
 
         write_calibration_report(result, args.report / "index.html", force=True)
     if args.json:
-        print_json({**result.figures(), "output": str(out),
+        print_json({**result.figures(), "board": _board_of(args, target, pattern), "output": str(out),
                     "report": None if args.report is None else str(args.report / "index.html")})
     else:
-        _print_summary(result, out)
+        _print_summary({**result.figures(), "board": _board_of(args, target, pattern)}, out)
     return EXIT_OK
+
+
+def _board_of(args: argparse.Namespace, target: Any, pattern: tuple[int, int]) -> str:
+    """The board used, in words (stated by the summary, the JSON and the report)."""
+    if target is not None and args.target is not None:
+        return f"{target.describe()} (from {args.target})"
+    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {args.square * 1000:g} mm squares"
 
 
 def _pm(value: float, sd: float | None, digits: int = 2) -> str:
@@ -215,8 +222,7 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
                                    fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
 
 
-def _print_summary(result: Any, out: Path) -> None:
-    figures = result.figures()
+def _print_summary(figures: dict[str, Any], out: Path) -> None:
     q = figures["quality"] or {}
     verdict = figures.get("verdict")
     if verdict:
@@ -224,6 +230,8 @@ def _print_summary(result: Any, out: Path) -> None:
         print(f"verdict: {verdict['level'].upper()}" + (f" ({'; '.join(flagged)})" if flagged else ""))
     print(f"wrote {out}: {q.get('views_used')} views used, {len(figures['dropped'])} skipped or dropped, "
           f"lens model {q.get('distortion_terms')}")
+    if figures.get("board"):
+        print(f"  board: {figures['board']}")
     cams = [("camera", figures["camera"])] if "camera" in figures else [("left", figures["left"]),
                                                                          ("right", figures["right"])]
     for label, cam in cams:
@@ -239,11 +247,32 @@ def _print_summary(result: Any, out: Path) -> None:
               f"{q.get('rms_stereo_px', 0):.3f} px, epipolar {q.get('epipolar_rms_px', 0):.3f} px")
     else:
         print(f"  RMS {q.get('rms_left_px', 0):.3f} px")
+    _print_honest(figures)
     models = figures.get("model_comparison")
     if models:
-        print("  held-out error: " + ", ".join(
+        print("  held-out error by lens model: " + ", ".join(
             f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
             + " px (* used)")
     for d in figures["dropped"]:
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
         print(f"  skipped {d['name']}{rms}: {d['reason']}")
+    for g in figures.get("rejected_corner_groups") or []:
+        print(f"  corners left out of {g['name']}: {g['left']} left, {g['right']} right ({g['reason']})")
+
+
+def _print_honest(figures: dict[str, Any]) -> None:
+    """The stereo held-out error, RMS over all corners beside the inlier RMS, and where each std comes from."""
+    if figures.get("rms_all_px") is not None and figures.get("corners_total"):
+        q = figures["quality"] or {}
+        print(f"  RMS {q.get('rms_stereo_px', 0):.3f} px over the inlier corners, {figures['rms_all_px']:.3f} px over "
+              f"all {figures['corners_total']} ({figures['corners_rejected']} rejected as outliers)")
+    held = figures.get("stereo_heldout")
+    if not held:
+        return
+    print(f"  stereo held-out error {held['heldout_px']:.3f} px over the inlier corners of pairs left out "
+          f"({held['folds']} folds; {held['heldout_all_px']:.3f} px over all, {held['corners_rejected']} of "
+          f"{held['corners_total']} corners rejected)")
+    params = held["parameters"]
+    jk = [n for n, p in params.items() if p["std_source"] == "jackknife"]
+    print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
+          + (", ".join(jk) if jk else "none") + " (both in --json)")

@@ -150,16 +150,51 @@ def _models_table(result: StereoCalibration | MonoCalibration) -> str:
         return "<p class='note'>model comparison not computed</p>"
     rows = [[s.model + (" (used)" if s.chosen else ""), s.heldout_px, " ".join(f"{f:.3f}" for f in s.folds_px),
              "best" if s.model == result.models.best else ""] for s in result.models.scores]
+    what = ("stereo held-out error: pairs left out of the fit, one board pose per pair fitted to both cameras"
+            if isinstance(result, StereoCalibration) else "held-out reprojection error: views left out of the fit")
     return html_table(["lens model (--distortion)", "held-out RMS (px)", "per fold (px)", ""], rows,
-                      caption="held-out reprojection error: views left out of the fit, each model", left=[0, 2])
+                      caption=f"{what}, each model", left=[0, 2])
 
 
 def _views_table(result: StereoCalibration) -> str:
     rows = [[v.name, v.left_px, v.right_px, v.stereo_px, "used" if v.used else v.reason] for v in result.views]
     rows += [[d.name, None, None, d.rms_px, d.reason] for d in result.dropped
              if not d.reason.startswith("outlier")]
+    rows += [[f"{g['name']} (corners)", None, None, None, f"{g['left']} left / {g['right']} right corners left out: "
+              f"{g['reason']}"] for g in result.corner_groups()]
     return html_table(["view", "left RMS (px)", "right RMS (px)", "both (px)", "status"], rows,
                       caption="every view: used, dropped as outlier, or skipped", left=[0, 4])
+
+
+def _board(pattern: tuple[int, int], square_m: float) -> str:
+    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {square_m * 1000:g} mm squares"
+
+
+def _honest_lines(result: StereoCalibration) -> list[str]:
+    """The stereo held-out error and the RMS over all corners, escaped paragraphs."""
+    out = []
+    sol = result.solution
+    if sol is not None and sol.corners_total:
+        rejected = sum(a + b for _, a, b in sol.rejected_corners)
+        out.append(f"RMS {sol.rms_px:.3f} px over the inlier corners, {sol.rms_all_px:.3f} px over all "
+                   f"{sol.corners_total} ({rejected} rejected as outliers).")
+    h = result.heldout
+    if h is not None:
+        out.append(f"Stereo held-out error {h.heldout_px:.3f} px over the inlier corners of pairs left out of the fit "
+                   f"({h.folds} folds; one board pose per held-out pair fitted to both cameras), {h.heldout_all_px:.3f}"
+                   f" px over all ({h.corners_rejected} of {h.corners_total} corners rejected).")
+    return [html.escape(line) for line in out]
+
+
+def _std_table(result: StereoCalibration) -> str:
+    h = result.heldout
+    if h is None:
+        return "<p class='note'>too few pairs for the jackknife: std from the covariance only</p>"
+    rows = [[s.name, s.value, s.covariance, s.jackknife, s.source] for s in h.stds]
+    return html_table(["parameter (px; baseline m; rotation deg)", "value", "std (covariance)",
+                       f"std ({h.folds}-fold jackknife)", "reported"], rows,
+                      caption="both standard deviations; the larger is reported and written to the profile",
+                      left=[0, 4])
 
 
 def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
@@ -169,12 +204,13 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
     size = p.image_size
     rows = _camera_rows("left", p.left) + _camera_rows("right", p.right) + _extrinsic_rows(result)
     summary = ReportSection("Summary", paragraphs=[html.escape(
+        f"Board: {result.board or _board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; lens model {q.distortion_terms}; "
         f"RMS left {q.rms_left_px:.3f} px, right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; "
         f"epipolar RMS after rectification {result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm. "
-        "Convention: X_right = R X_left + T (metres).")]
+        "Convention: X_right = R X_left + T (metres).")] + _honest_lines(result)
         + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
-        tables=[html_table(["parameter", "value", "std", "relative std"], rows)])
+        tables=[html_table(["parameter", "value", "std", "relative std"], rows), _std_table(result)])
     models = ReportSection("Lens model comparison", tables=[_models_table(result)])
     views = list(result.views)
     chart = _error_chart([v.name for v in views], {"left": [v.left_px for v in views],
@@ -216,6 +252,7 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     q = result.profile.provenance.calibration
     assert q is not None
     summary = ReportSection("Summary", paragraphs=[html.escape(
+        f"Board: {_board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
         + [f"<span class='warn'>warning: {html.escape(w)}</span>" for w in result.warnings],
         tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])

@@ -40,7 +40,9 @@ class PairSolution:
     """The solved pair. ``keep`` indexes the input views used; ``per_view`` (len(keep), 3) RMS px (left,
     right, both); ``std_left/right`` (fx fy cx cy d0..dn, inf where unobservable, 0 for fixed terms);
     ``outliers`` (input index, left px, right px, both px, reason); ``mismatched`` (input index, reason);
-    ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera)."""
+    ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera);
+    ``rms_all_px`` the RMS over every corner of the used views (rejected ones too) of ``corners_total``;
+    ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers."""
 
     K1: FloatArray
     D1: FloatArray
@@ -65,6 +67,9 @@ class PairSolution:
     rvecs: tuple[FloatArray, ...]
     tvecs: tuple[FloatArray, ...]
     method: str
+    rms_all_px: float = float("nan")
+    corners_total: int = 0
+    rejected_corners: tuple[tuple[int, int, int], ...] = ()
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -125,7 +130,12 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: L
                                                   if r is not None and m is not None]))))
     rms_r = float(np.sqrt(np.mean(np.concatenate([np.sum(r[m] ** 2, axis=1) for r, m in zip(rr, mr, strict=True)
                                                   if r is not None and m is not None]))))
+    every = [np.sum(r ** 2, axis=1) for j in used for r in sol.residuals[j] if r is not None]
+    groups = tuple((keep[j], *(0 if m is None else int(np.sum(~m)) for m in sol.inliers[j])) for j in used
+                   if any(m is not None and not m.all() for m in sol.inliers[j]))
     return PairSolution(
+        rms_all_px=float(np.sqrt(np.mean(np.concatenate(every)))) if every else float("nan"),
+        corners_total=int(sum(len(e) for e in every)), rejected_corners=groups,  # type: ignore[arg-type]
         K1=sol.K1, D1=sol.D1, K2=sol.K2, D2=sol.D2, R=sol.R, T=sol.T, std_left=_camera_std(sol, "left", lens),
         std_right=_camera_std(sol, "right", lens), baseline_std_m=b_std, rotation_std_deg=r_std,
         rms_left_px=rms_l, rms_right_px=rms_r, rms_px=sol.rms_px, keep=tuple(keep[j] for j in used),
@@ -175,7 +185,7 @@ def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tu
         unobservable=tuple(f"{side} parameter {i}" for side, m in (("left", ml), ("right", mr))
                            for i, s in enumerate(m.std) if not np.isfinite(s)),
         residuals=tuple((a.astype(np.float64), b.astype(np.float64)) for a, b in res),
-        rvecs=st.rvecs, tvecs=st.tvecs,
+        rvecs=st.rvecs, tvecs=st.tvecs, rms_all_px=st.rms_px, corners_total=2 * len(obj) * len(keep),
         method="s2r calibrate --fix-intrinsics: OpenCV calibrateCameraExtended per camera, stereoCalibrate "
                "with CALIB_FIX_INTRINSIC (as ROS camera_calibration)")
 

@@ -123,8 +123,27 @@ class StereoCalibration:
             "unobservable": [] if self.solution is None else list(self.solution.unobservable),
             "model_comparison": None if self.models is None else self.models.as_dict(),
             "board": self.board,
+            "rms_all_px": None if self.solution is None else _nan_none(self.solution.rms_all_px),
+            "corners_total": None if self.solution is None else self.solution.corners_total,
+            "corners_rejected": None if self.solution is None else
+            sum(a + b for _, a, b in self.solution.rejected_corners),
+            "rejected_corner_groups": self.corner_groups(),
             "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
         }
+
+
+    def corner_groups(self) -> list[dict[str, Any]]:
+        """Every used view that lost corners as outliers: its name, the count per camera and why."""
+        if self.solution is None:
+            return []
+        thr = "5 robust sigmas of the residuals (at least 0.3 px)"
+        return [{"name": self.used_names[self.solution.keep.index(i)] if i in self.solution.keep else str(i),
+                 "left": a, "right": b, "reason": f"corner residual beyond {thr}"}
+                for i, a, b in self.solution.rejected_corners]
+
+
+def _nan_none(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
 
 
 def _camera_figures(cam: Camera) -> dict[str, Any]:
@@ -232,7 +251,8 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*([models.warning] if models is not None and models.warning else []),
+    warnings = [*_dropped_warning(dropped),
+                *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
@@ -253,6 +273,15 @@ def calibrate_stereo_detections(
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
         verdict=verdict, heldout=held, board=board_text(pattern, square_m))
+
+
+def _dropped_warning(dropped: Sequence[DroppedView]) -> list[str]:
+    """One line when views with a board were dropped (outliers, mismatched pairs, a board in one image only)."""
+    valid = [d.name for d in dropped if d.reason.startswith(("outlier", "mismatched")) or "shows the board" in d.reason]
+    if not valid:
+        return []
+    named = ", ".join(valid[:8]) + (" ..." if len(valid) > 8 else "")
+    return [f"{len(valid)} view(s) with a board found were dropped: {named} (each reason is listed under dropped)"]
 
 
 def board_text(pattern: tuple[int, int], square_m: float) -> str:

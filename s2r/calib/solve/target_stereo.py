@@ -228,7 +228,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         used_names=tuple(joint_obs[i].name for i in sol.keep),
         corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
         corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
-        reordered=tuple(reordered), solution=aligned, verdict=verdict)
+        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe())
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
@@ -271,7 +271,7 @@ def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int
         threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
         epipolar_rms_px=epi, warnings=tuple(warnings), used_names=tuple(v.name for v in views),
         corners_left=tuple(v.left for v in views), corners_right=tuple(v.right for v in views),
-        reordered=tuple(reordered))
+        reordered=tuple(reordered), board=target.describe())
 
 
 def _unobservable(names: Sequence[str]) -> list[str]:

@@ -118,6 +118,12 @@ def stereo_views(pairs: Sequence[tuple[str, Detection, Detection]], pattern: tup
     dropped: list[DroppedView] = []
     for name, dl, dr in pairs:
         bad = [d for d in (dl, dr) if d.status != "ok"]
+        if len(bad) == 1:
+            other = dr if bad[0] is dl else dl
+            why = _skip_reason(bad[0])
+            dropped.append(why.model_copy(update={"reason": f"{why.reason}; its partner {other.name} shows the "
+                                                            "board, so the pair is dropped"}))
+            continue
         if bad:
             dropped.extend(_skip_reason(d) for d in bad)
             continue
