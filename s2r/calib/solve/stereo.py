@@ -23,7 +23,10 @@ from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
 from s2r.calib.solve.views import (
     MIN_VIEWS,
+    REPEAT_PX,
+    StereoViews,
     check_sizes,
+    merge_repeats,
     no_board_error,
     select_diverse,
     stereo_views,
@@ -222,6 +225,8 @@ def calibrate_stereo_detections(
     if not any(d.status == "ok" for _, dl, dr in pairs for d in (dl, dr)):
         raise no_board_error(readable, pattern)
     dropped = [*extra_dropped, *views.dropped]
+    views, repeats = _merged(views)
+    dropped += repeats
     if len(views.names) < MIN_VIEWS:
         raise too_few_error(len(views.names), dropped, pattern=pattern)
     obj = board_object_points(pattern, square_m)
@@ -251,7 +256,7 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*_dropped_warning(dropped),
+    warnings = [*_repeat_warning(repeats), *_dropped_warning(dropped),
                 *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
@@ -273,6 +278,22 @@ def calibrate_stereo_detections(
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
         verdict=verdict, heldout=held, board=board_text(pattern, square_m))
+
+
+def _merged(views: StereoViews) -> tuple[StereoViews, list[DroppedView]]:
+    """The views without repeats of an earlier view (a still board), and a DroppedView per repeat."""
+    keep, repeats = merge_repeats(views.names, views.left, views.right)
+    if not repeats:
+        return views, []
+    return replace(views, names=tuple(views.names[i] for i in keep), left=tuple(views.left[i] for i in keep),
+                   right=tuple(views.right[i] for i in keep)), repeats
+
+
+def _repeat_warning(repeats: Sequence[DroppedView]) -> list[str]:
+    if not repeats:
+        return []
+    return [f"{len(repeats)} view(s) repeat an earlier view (every corner within {REPEAT_PX} px: a board held "
+            "still); merged into it, so the std counts each board pose once"]
 
 
 def _dropped_warning(dropped: Sequence[DroppedView]) -> list[str]:
