@@ -31,10 +31,11 @@ def test_known_rig_via_cli_with_report_and_cache(synthetic_set: tuple[Path, Ster
     assert q is not None and q.views_used + len(q.views_dropped) == 30 and q.coverage_left is not None
     assert all(len(s.sha256) == 64 for s in profile.provenance.sources)
     page = (report / "index.html").read_text()
-    # errors, thumbnails, residual vectors, board poses, coverage, overlay, rectified pair
-    assert page.count("data:image/png;base64,") == 7
+    # errors, thumbnails, residual vectors, board poses, projection uncertainty, coverage, overlay, rectified pair
+    assert page.count("data:image/png;base64,") == 8
     for title in ("Per-view errors", "Coverage", "rectified pair", "relative std", "Lens model comparison",
-                  "held-out RMS", "board poses in 3D", "residual vectors", "Tx (mm, signed)"):
+                  "held-out RMS", "board poses in 3D", "residual vectors", "Tx (mm, signed)", "Projection uncertainty",
+                  "Board: chessboard 9x6 inner corners, 25 mm squares", "Stereo held-out error", "jackknife"):
         assert title in page
     assert page.index("Verdict") < page.index("Summary") and first["verdict"]["level"] in ("good", "check", "poor")
     assert first["model_comparison"]["models"][0]["chosen"] and len(first["views"]) == q.views_used + sum(

@@ -21,7 +21,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.report.plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
+from s2r.calib.report.plots import (
+    board_poses_3d,
+    coverage_maps,
+    projection_uncertainty,
+    residual_vectors,
+    thumbnail_strip,
+)
 from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.stereo import StereoCalibration
 from s2r.calib.solve.synth import board_object_points
@@ -233,6 +239,15 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
                 {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
             ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
                                                  board_object_points(q.pattern, q.square_m), p.R, p.T))]))
+    if any(m is not None for maps in result.projection.values() for m in maps.values()):
+        rows = [[side, src, m.centre_px, m.corner_px] for side, maps in result.projection.items()
+                for src, m in maps.items() if m is not None]
+        sections.append(ReportSection("Projection uncertainty", paragraphs=[html.escape(
+            "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
+            "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
+            images=[("projection uncertainty over the image (the larger of the two)",
+                     projection_uncertainty(result.projection, size))],
+            tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])]))
     sections.append(ReportSection("Coverage", paragraphs=[html.escape(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "

@@ -62,7 +62,8 @@ class ParameterStd:
 class StereoHeldout:
     """The stereo held-out error over ``folds`` folds (px, per corner, both coordinates): over the inlier
     corners (``heldout_px``, the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of
-    ``corners_total`` left out by the training solve's corner rule; per fold; and the standard deviations."""
+    ``corners_total`` left out by the training solve's corner rule; per fold; the standard deviations; and
+    per camera the folds' intrinsics (K, D) (for the projection uncertainty)."""
 
     folds: int
     heldout_px: float
@@ -72,6 +73,7 @@ class StereoHeldout:
     folds_px: tuple[float, ...]
     stds: tuple[ParameterStd, ...]
     failed: tuple[str, ...] = ()
+    fold_intrinsics: tuple[tuple[tuple[FloatArray, FloatArray], ...], ...] = ()
 
     def std(self, name: str) -> ParameterStd:
         """The entry of one of ``PARAMETERS``."""
@@ -125,9 +127,11 @@ def _summary(outcomes: Sequence[FoldOutcome], sol: PairSolution) -> StereoHeldou
                  for name, v, c, j in zip(PARAMETERS, values, cov, jk, strict=True))
     n_in = sum(o.sq_inlier.size for o in good)
     n_all = sum(o.sq_all.size for o in good)
+    intr = (tuple((o.K1, o.D1) for o in good if o.D1 is not None),
+            tuple((o.K2, o.D2) for o in good if o.D2 is not None))
     return StereoHeldout(len(outcomes), _rms([o.sq_inlier for o in good]), _rms([o.sq_all for o in good]),
                          n_all - n_in, n_all, tuple(_rms([o.sq_inlier]) for o in good), stds,
-                         tuple(o.failed for o in outcomes if o.failed))
+                         tuple(o.failed for o in outcomes if o.failed), intr)
 
 
 def _rotvec(R: FloatArray) -> FloatArray:

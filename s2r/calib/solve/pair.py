@@ -42,7 +42,8 @@ class PairSolution:
     ``outliers`` (input index, left px, right px, both px, reason); ``mismatched`` (input index, reason);
     ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera);
     ``rms_all_px`` the RMS over every corner of the used views (rejected ones too) of ``corners_total``;
-    ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers."""
+    ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers;
+    ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only)."""
 
     K1: FloatArray
     D1: FloatArray
@@ -70,6 +71,8 @@ class PairSolution:
     rms_all_px: float = float("nan")
     corners_total: int = 0
     rejected_corners: tuple[tuple[int, int, int], ...] = ()
+    cov_left: FloatArray | None = None
+    cov_right: FloatArray | None = None
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -110,6 +113,11 @@ def _camera_std(sol: JointSolution, side: str, lens: LensModel) -> FloatArray:
     return np.concatenate([std, dist])
 
 
+def _intrinsics_cov(sol: JointSolution, side: str, lens: LensModel) -> FloatArray:
+    idx = [sol.names.index(f"{side} {n}") for n in ("fx", "fy", "cx", "cy", *(lens.coef_names[i] for i in lens.free))]
+    return np.asarray(sol.cov[np.ix_(idx, idx)], np.float64)
+
+
 def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: LensModel,
            max_error_px: float | None) -> PairSolution:
     sol = solve_joint([obs[i] for i in keep], lens, init.joint_init(), max_view_error_px=max_error_px)
@@ -134,6 +142,7 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: L
     groups = tuple((keep[j], *(0 if m is None else int(np.sum(~m)) for m in sol.inliers[j])) for j in used
                    if any(m is not None and not m.all() for m in sol.inliers[j]))
     return PairSolution(
+        cov_left=_intrinsics_cov(sol, "left", lens), cov_right=_intrinsics_cov(sol, "right", lens),
         rms_all_px=float(np.sqrt(np.mean(np.concatenate(every)))) if every else float("nan"),
         corners_total=int(sum(len(e) for e in every)), rejected_corners=groups,  # type: ignore[arg-type]
         K1=sol.K1, D1=sol.D1, K2=sol.K2, D2=sol.D2, R=sol.R, T=sol.T, std_left=_camera_std(sol, "left", lens),

@@ -19,6 +19,7 @@ from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.calib.solve.models import ModelComparison
 from s2r.calib.solve.pair import PairSolution, solve_pair
+from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
 from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
 from s2r.calib.solve.views import (
@@ -100,6 +101,7 @@ class StereoCalibration:
     view_paths: dict[str, tuple[Path, Path]] = field(default_factory=dict, repr=False)
     heldout: StereoHeldout | None = None
     board: str = ""
+    projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -132,6 +134,8 @@ class StereoCalibration:
             sum(a + b for _, a, b in self.solution.rejected_corners),
             "rejected_corner_groups": self.corner_groups(),
             "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
+            "projection_uncertainty": {side: {src: None if m is None else m.as_dict() for src, m in maps.items()}
+                                       for side, maps in self.projection.items()},
         }
 
 
@@ -277,7 +281,21 @@ def calibrate_stereo_detections(
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
-        verdict=verdict, heldout=held, board=board_text(pattern, square_m))
+        verdict=verdict, heldout=held, board=board_text(pattern, square_m),
+        projection=projection_maps(sol, held, size, lens_model(distortion).free))
+
+
+def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[int, int], free: Sequence[int]
+                    ) -> dict[str, dict[str, ProjectionMap | None]]:
+    """Per camera the projection uncertainty at 1 m from the covariance and from the jackknife folds."""
+    out: dict[str, dict[str, ProjectionMap | None]] = {}
+    for i, (side, K, D, cov) in enumerate((("left", sol.K1, sol.D1, sol.cov_left),
+                                           ("right", sol.K2, sol.D2, sol.cov_right))):
+        draws = [] if cov is None else covariance_samples(K, D, cov, free)
+        folds = [] if held is None or len(held.fold_intrinsics) <= i else list(held.fold_intrinsics[i])
+        out[side] = {"covariance": projection_map(K, D, size, draws, jackknife=False),
+                     "jackknife": projection_map(K, D, size, folds, jackknife=True)}
+    return out
 
 
 def _merged(views: StereoViews) -> tuple[StereoViews, list[DroppedView]]:
