@@ -10,7 +10,7 @@ synthetic rig both agree. The lens models are compared on the same folds by thei
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -27,6 +27,10 @@ __all__ = ["ParameterStd", "StereoHeldout", "stereo_heldout"]
 
 FloatArray = NDArray[np.float64]
 Corners = NDArray[np.float32]
+#: Most pairs (evenly spaced) on which the lens models are compared: the comparison needs the models' relative
+#: held-out errors, not every pair, and this bounds its cost (the chosen model's held-out error and jackknife
+#: use every pair).
+MAX_COMPARE_VIEWS = 16
 
 
 @dataclass(frozen=True)
@@ -162,7 +166,8 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
                    ) -> tuple[StereoHeldout | None, ModelComparison | None]:
     """Held-out error and both std devs of the solved pair ``sol`` (its used views ``left``/``right``, in the
     order of ``sol.rvecs``), and the lens models of ``compare`` scored on the same folds (None without one
-    other model). ``(None, None)`` when there are too few views for two folds."""
+    other model; on at most ``MAX_COMPARE_VIEWS`` evenly spaced pairs, every model on the same ones).
+    ``(None, None)`` when there are too few views for two folds."""
     obs = [StereoObservation(n, chessboard_observation(obj, a), chessboard_observation(obj, b))
            for n, a, b in zip(names, left, right, strict=True)]
     folds = split_folds(len(obs))
@@ -170,14 +175,24 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
         return None, None
     others = [m for m in compare if m != lens.name and m in LENS_MODELS]
     tasks = _tasks(obs, sol, lens, folds, max_error_px)
-    for m in others:
-        tasks += _tasks(obs, sol, LENS_MODELS[m], folds, max_error_px)
+    sub = np.unique(np.linspace(0, len(obs) - 1, min(len(obs), MAX_COMPARE_VIEWS)).round().astype(int))
+    small = len(sub) < len(obs) and bool(others)
+    sub_sol, sub_obs = (_subset(sol, sub), [obs[i] for i in sub]) if small else (sol, obs)
+    sub_folds = split_folds(len(sub_obs)) if small else folds
+    for m in ([lens.name] if small else []) + others:
+        tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px)
     outcomes = run_folds(tasks, jobs=jobs)
     k = len(folds)
-    mine = outcomes[:k]
-    result = _summary(mine, sol)
-    if not others:
+    result = _summary(outcomes[:k], sol)
+    if not others or not sub_folds:
         return result, None
-    scored = {lens.name: mine, **{m: outcomes[k * (i + 1):k * (i + 2)] for i, m in enumerate(others)}}
+    rest = outcomes[k:] if small else outcomes
+    ks = len(sub_folds)
+    scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]
     return result, _comparison({m: scored[m] for m in order}, lens.name)
+
+
+def _subset(sol: PairSolution, idx: NDArray[np.int_]) -> PairSolution:
+    """``sol`` with only the board poses of views ``idx`` (the warm start of the lens-model comparison)."""
+    return replace(sol, rvecs=tuple(sol.rvecs[i] for i in idx), tvecs=tuple(sol.tvecs[i] for i in idx))

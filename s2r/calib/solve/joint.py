@@ -383,11 +383,13 @@ def _names(lens: LensModel) -> list[str]:
 
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
-                max_view_error_px: float | None = None, rel_tol: float = 1e-10) -> JointSolution:
+                max_view_error_px: float | None = None, rel_tol: float = 1e-10,
+                covariance: bool = True) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
     ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
-    from the full solution, use a looser one).
+    from the full solution, use a looser one); ``covariance`` False skips the covariance (NaN; they need
+    none).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -411,7 +413,10 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")
     names = _names(lens)
-    cov, unobservable, sigma = _covariance(state, views, masks, active, names)
+    if covariance:
+        cov, unobservable, sigma = _covariance(state, views, masks, active, names)
+    else:
+        cov, unobservable, sigma = np.full((len(names), len(names)), np.nan), (), float("nan")
     per_view = np.full((len(views), 2), np.nan)
     residuals = []
     sq, n = 0.0, 0
