@@ -18,7 +18,11 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   cornerSubPix 11x11) against s2r's detection stream (no cache, --jobs processes), boards found by each;
 - whole run: the plain loop plus calibrateCamera per camera and stereoCalibrate (k1 k2 p1 p2, k3 fixed, as
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
-  detection, checks, the joint solve and the held-out model comparison).
+  detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
+  held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
+  Issue 22: 0.65x before its changes (issue figure; 0.57x measured here before them, one run on a loaded
+  machine), 0.68x after (median of 3 on a machine at load 9-14 on 2 cores, where s2r's two detection workers
+  gain nothing): the resampling adds about 0.55 CPU-s (two processes) to the 0.2 s the plain script spends solving.
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.

@@ -39,8 +39,11 @@ def test_images_without_board_are_listed(small_set: Path, tmp_path: Path, capsys
     _blank(small_set / "left" / "02.png")
     code, out, _ = _run(capsys, str(small_set), "-o", str(tmp_path / "out.yaml"), "--json")
     assert code == 0
-    dropped = {d["name"]: d["reason"] for d in json.loads(out)["dropped"]}
-    assert dropped["left/02.png"] == "no board: no 9x6 chessboard found"
+    figures = json.loads(out)
+    dropped = {d["name"]: d["reason"] for d in figures["dropped"]}
+    assert dropped["left/02.png"] == ("no board: no 9x6 chessboard found; its partner right/02.png shows the board, "
+                                      "so the pair is dropped")
+    assert any("with a board found were dropped: left/02.png" in w for w in figures["warnings"])
 
 
 def test_left_without_partner_is_named(small_set: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
