@@ -6,6 +6,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 
 from s2r.calib.detect import Detection, detect_board
 from s2r.calib.solve.resample import PARAMETERS, split_folds
@@ -58,3 +59,18 @@ def test_a_board_fast_check_misses_is_found(synthetic_set: tuple[Path, StereoPro
     corners, detector = detect_board(gray, (9, 6))
     assert ok and corners is not None and detector == "classic-plain"
     assert float(np.max(np.abs(corners - plain.reshape(-1, 2)))) < 1.5  # the same board, refined
+
+
+def test_a_bent_board_is_solved_and_used_where_it_lowers_the_heldout_error() -> None:
+    rig = make_rig(23, views=16, noise_px=0.05, k3_max=0.0, bend_m=(-0.0002, 0.0005))
+    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                      compare=False)
+    warp = res.figures()["board_warp"]
+    assert warp is not None and warp["used"] and warp["heldout_warped_px"] < warp["heldout_flat_px"]
+    for got, true, sd in zip(warp["warp_mm"], (-0.2, 0.5), warp["warp_std_mm"], strict=True):
+        assert abs(got - true) <= max(4 * sd, 0.02), (got, true, sd)
+    assert abs(res.profile.left.fx_px - rig.left_lens.fx) < 0.001 * rig.left_lens.fx
+    flat = make_rig(24, views=16, noise_px=0.05, k3_max=0.0)
+    flat_warp = calibrate_stereo_detections(_pairs(flat), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                            compare=False).figures()["board_warp"]
+    assert flat_warp["warp_mm"] == pytest.approx([0, 0], abs=0.05)

@@ -109,9 +109,10 @@ def _tasks(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel,
     for test in folds:
         train = [i for i in range(len(obs)) if i not in set(test)]
         init = JointInit(sol.K1, fit(sol.D1), sol.K2, fit(sol.D2), sol.R, sol.T,
-                         [sol.rvecs[i] for i in train], [sol.tvecs[i] for i in train])
+                         [sol.rvecs[i] for i in train], [sol.tvecs[i] for i in train], warp=sol.warp_m)
         tasks.append(FoldTask(lens, tuple(obs[i] for i in train), tuple(obs[i] for i in test), init,
-                              tuple(sol.rvecs[i] for i in test), tuple(sol.tvecs[i] for i in test), max_error_px))
+                              tuple(sol.rvecs[i] for i in test), tuple(sol.tvecs[i] for i in test), max_error_px,
+                              warp=sol.warp_m is not None))
     return tasks
 
 
@@ -160,21 +161,36 @@ def _comparison(scored: dict[str, Sequence[FoldOutcome]], chosen: str) -> ModelC
     return ModelComparison(tuple(scores), best.model, warning)
 
 
+def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners
+                  ) -> list[StereoObservation]:
+    return [StereoObservation(n, chessboard_observation(obj, a), chessboard_observation(obj, b))
+            for n, a, b in zip(names, left, right, strict=True)]
+
+
+Views = tuple[Sequence[str], Sequence[Corners], Sequence[Corners]]
+
+
 def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,
                    sol: PairSolution, *, lens: LensModel, compare: Sequence[str] = tuple(LENS_MODELS),
-                   max_error_px: float | None = None, jobs: int = 1
-                   ) -> tuple[StereoHeldout | None, ModelComparison | None]:
+                   max_error_px: float | None = None, jobs: int = 1,
+                   warped: tuple[Views, PairSolution] | None = None
+                   ) -> tuple[StereoHeldout | None, ModelComparison | None, StereoHeldout | None]:
     """Held-out error and both std devs of the solved pair ``sol`` (its used views ``left``/``right``, in the
-    order of ``sol.rvecs``), and the lens models of ``compare`` scored on the same folds (None without one
-    other model; on at most ``MAX_COMPARE_VIEWS`` evenly spaced pairs, every model on the same ones).
-    ``(None, None)`` when there are too few views for two folds."""
-    obs = [StereoObservation(n, chessboard_observation(obj, a), chessboard_observation(obj, b))
-           for n, a, b in zip(names, left, right, strict=True)]
+    order of ``sol.rvecs``), the lens models of ``compare`` scored on the same folds (None without one
+    other model; on at most ``MAX_COMPARE_VIEWS`` evenly spaced pairs, every model on the same ones), and the
+    same figures of the ``warped`` solve (the board's bend solved; its own views) when given.
+    ``(None, None, None)`` when there are too few views for two folds."""
+    obs = _observations(names, left, right, obj)
     folds = split_folds(len(obs))
     if not folds:
-        return None, None
+        return None, None, None
     others = [m for m in compare if m != lens.name and m in LENS_MODELS]
     tasks = _tasks(obs, sol, lens, folds, max_error_px)
+    w_folds: list[list[int]] = []
+    if warped is not None:
+        w_obs = _observations(*warped[0], obj)
+        w_folds = split_folds(len(w_obs))
+        tasks += _tasks(w_obs, warped[1], lens, w_folds, max_error_px)
     sub = np.unique(np.linspace(0, len(obs) - 1, min(len(obs), MAX_COMPARE_VIEWS)).round().astype(int))
     small = len(sub) < len(obs) and bool(others)
     sub_sol, sub_obs = (_subset(sol, sub), [obs[i] for i in sub]) if small else (sol, obs)
@@ -182,15 +198,16 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
     for m in ([lens.name] if small else []) + others:
         tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px)
     outcomes = run_folds(tasks, jobs=jobs)
-    k = len(folds)
+    k, kw = len(folds), len(w_folds)
     result = _summary(outcomes[:k], sol)
+    w_result = _summary(outcomes[k:k + kw], warped[1]) if warped is not None and kw else None
     if not others or not sub_folds:
-        return result, None
-    rest = outcomes[k:] if small else outcomes
+        return result, None, w_result
+    rest = outcomes[k + kw:] if small else [*outcomes[:k], *outcomes[k + kw:]]
     ks = len(sub_folds)
     scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]
-    return result, _comparison({m: scored[m] for m in order}, lens.name)
+    return result, _comparison({m: scored[m] for m in order}, lens.name), w_result
 
 
 def _subset(sol: PairSolution, idx: NDArray[np.int_]) -> PairSolution:

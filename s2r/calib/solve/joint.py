@@ -20,7 +20,7 @@ not constrain (relative eigenvalue below 1e-12 after column scaling) make the pa
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -48,6 +48,7 @@ class JointInit:
     T: FloatArray
     rvecs: Sequence[FloatArray]
     tvecs: Sequence[FloatArray]
+    warp: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,7 @@ class JointSolution:
     residuals: tuple[tuple[FloatArray | None, FloatArray | None], ...]
     corners_dropped: int
     view_threshold_px: float
+    warp: FloatArray = field(default_factory=lambda: np.zeros(2))
 
     def std(self, name: str) -> float:
         """Standard deviation of a global parameter (inf when unobservable)."""
@@ -98,8 +100,15 @@ class JointSolution:
 class _State:
     """Mutable parameters of the solve."""
 
-    def __init__(self, lens: LensModel, init: JointInit) -> None:
+    def __init__(self, lens: LensModel, init: JointInit, *, warp: bool = False,
+                 views: Sequence[StereoObservation] = ()) -> None:
         self.lens = lens
+        self.nw = 2 if warp else 0
+        self.warp = np.zeros(2) if init.warp is None else np.asarray(init.warp, np.float64).reshape(2).copy()
+        pts = [o.obj for v in views for o in (v.left, v.right) if o is not None and len(o.obj)]
+        allp = np.concatenate(pts) if pts else np.zeros((1, 3))
+        self.span = (float(allp[:, 0].min()), float(np.ptp(allp[:, 0])) or 1.0,
+                     float(allp[:, 1].min()), float(np.ptp(allp[:, 1])) or 1.0)
         self.K = [np.asarray(init.K1, np.float64).copy(), np.asarray(init.K2, np.float64).copy()]
         self.D = [np.zeros(lens.n_coef), np.zeros(lens.n_coef)]
         for d, src in zip(self.D, (init.D1, init.D2), strict=True):
@@ -118,7 +127,7 @@ class _State:
         parts = []
         for K, D in zip(self.K, self.D, strict=True):
             parts += [[K[0, 0], K[1, 1], K[0, 2], K[1, 2]], D[list(self.lens.free)]]
-        return np.concatenate([*map(np.asarray, parts), self.r_lr, self.t_lr])
+        return np.concatenate([*map(np.asarray, parts), self.warp[:self.nw], self.r_lr, self.t_lr])
 
     def set_global(self, g: FloatArray) -> None:
         ni = self.n_intr
@@ -126,7 +135,16 @@ class _State:
             v = g[c * ni:(c + 1) * ni]
             self.K[c] = np.array([[v[0], 0, v[2]], [0, v[1], v[3]], [0, 0, 1.0]])
             self.D[c][list(self.lens.free)] = v[4:]
-        self.r_lr, self.t_lr = g[2 * ni:2 * ni + 3].copy(), g[2 * ni + 3:].copy()
+        self.warp[:self.nw] = g[2 * ni:2 * ni + self.nw]
+        e0 = 2 * ni + self.nw
+        self.r_lr, self.t_lr = g[e0:e0 + 3].copy(), g[e0 + 3:].copy()
+
+    def warp_basis(self, obj: FloatArray) -> FloatArray:
+        """(M, 2) board bend shapes at board points ``obj``: ``1 - u^2`` and ``1 - v^2`` with u, v in [-1, 1]
+        across the board's corners (mrcal's parabolic board warp: the bend at the centre, metres)."""
+        x0, wx, y0, wy = self.span
+        u, v = 2 * (obj[:, 0] - x0) / wx - 1, 2 * (obj[:, 1] - y0) / wy - 1
+        return np.column_stack([1 - u ** 2, 1 - v ** 2])
 
     def copy_views(self) -> tuple[list[FloatArray], list[FloatArray]]:
         return [r.copy() for r in self.rv], [t.copy() for t in self.tv]
@@ -193,26 +211,37 @@ def _camera_terms(state: _State, cam: int, c: _Corners, poses: tuple[FloatArray,
     Board points go to the camera frame here (the view's pose, then the pair's for the right camera) and are
     projected in one call with a zero pose, whose translation Jacobian is d pixel / d point. ``poses``: the
     active views' rotations (n, 3, 3), their derivatives (n, 3, 3, 3) and translations (n, 3)."""
-    ni = state.n_intr
-    ng = 2 * ni + 6
+    ni, nw = state.n_intr, state.nw
+    e0 = 2 * ni + nw
+    ng = e0 + 6
     m = len(c.obj)
     R, dR, t = poses
-    X = (R[c.seg] @ c.obj[:, :, None])[:, :, 0] + t[c.seg]
-    dX_dr = (dR[c.seg].reshape(m, 9, 3) @ c.obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
+    obj = c.obj
+    if nw:
+        basis = state.warp_basis(obj)
+        obj = obj.copy()
+        obj[:, 2] += basis @ state.warp
+        dX_dw = R[c.seg][:, :, 2:3] * basis[:, None, :]  # (M, 3, 2)
+    X = (R[c.seg] @ obj[:, :, None])[:, :, 0] + t[c.seg]
+    dX_dr = (dR[c.seg].reshape(m, 9, 3) @ obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
     Jg = np.zeros((m, 2, ng))
     if cam == 1:
         R_lr, dR_lr = _rotations([state.r_lr])
         dX_drlr = (X @ dR_lr[0].reshape(9, 3).T).reshape(m, 3, 3).transpose(0, 2, 1)
         X = X @ R_lr[0].T + state.t_lr
         dX_dr = R_lr[0] @ dX_dr
+        if nw:
+            dX_dw = R_lr[0] @ dX_dw
     pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
     jac = jac.reshape(m, 2, -1)
     dp_dX = jac[:, :, 3:6]
     cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
     Jg[:, :, cam * ni:(cam + 1) * ni] = jac[:, :, cols]
+    if nw:
+        Jg[:, :, 2 * ni:e0] = dp_dX @ dX_dw
     if cam == 1:
-        Jg[:, :, 2 * ni:2 * ni + 3] = dp_dX @ dX_drlr
-        Jg[:, :, 2 * ni + 3:] = dp_dX
+        Jg[:, :, e0:e0 + 3] = dp_dX @ dX_drlr
+        Jg[:, :, e0 + 3:] = dp_dX
         dp_dt = dp_dX @ R_lr[0]
     else:
         dp_dt = dp_dX
@@ -232,7 +261,7 @@ def _normal_equations(state: _State, views: Sequence[StereoObservation], masks: 
                       ) -> tuple[float, int, FloatArray, FloatArray, _Blocks]:
     """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v); ``data``: the gathered corners
     (:func:`_prepare`) when the caller already has them."""
-    ng = 2 * state.n_intr + 6
+    ng = 2 * state.n_intr + state.nw + 6
     n = len(active)
     A, b = np.zeros((ng, ng)), np.zeros(ng)
     Agv, Avv, bv = np.zeros((n, ng, 6)), np.zeros((n, 6, 6)), np.zeros((n, 6))
@@ -376,20 +405,22 @@ def _covariance(state: _State, views: Sequence[StereoObservation], masks: _Masks
     return cov, tuple(n for n, b in zip(names, bad, strict=True) if b), float(np.sqrt(sigma2))
 
 
-def _names(lens: LensModel) -> list[str]:
+def _names(lens: LensModel, warp: bool = False) -> list[str]:
     intr = ["fx", "fy", "cx", "cy", *(lens.coef_names[i] for i in lens.free)]
-    return [f"{side} {n}" for side in ("left", "right") for n in intr] + ["rx", "ry", "rz", "tx", "ty", "tz"]
+    return [f"{side} {n}" for side in ("left", "right") for n in intr] + (["warp x", "warp y"] if warp else []) \
+        + ["rx", "ry", "rz", "tx", "ty", "tz"]
 
 
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
                 max_view_error_px: float | None = None, rel_tol: float = 1e-10,
-                covariance: bool = True) -> JointSolution:
+                covariance: bool = True, warp: bool = False) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
     ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
     from the full solution, use a looser one); ``covariance`` False skips the covariance (NaN; they need
-    none).
+    none); ``warp`` also solves the board's bend (two parameters, metres, see ``_State.warp_basis``; the
+    initial one from ``init.warp``).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -397,7 +428,7 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     if len(views) < _MIN_VIEWS:
         raise CalibrationError(f"only {len(views)} views for the joint solve, at least {_MIN_VIEWS} needed",
                                hint="record more views with the board visible in both cameras")
-    state = _State(lens, init)
+    state = _State(lens, init, warp=warp, views=views)
     masks: _Masks = [[None if o is None else np.ones(len(o.ids), bool) for o in (v.left, v.right)] for v in views]
     active = list(range(len(views)))
     view_thr: float | None = None
@@ -412,7 +443,7 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     if not np.all(np.isfinite(state.global_vec())):
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")
-    names = _names(lens)
+    names = _names(lens, warp)
     if covariance:
         cov, unobservable, sigma = _covariance(state, views, masks, active, names)
     else:
@@ -441,4 +472,5 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
         sigma_px=sigma, rms_px=float(np.sqrt(sq / max(1, n))), per_view_px=per_view,
         used=tuple(k in active for k in range(len(views))),
         inliers=tuple((m[0], m[1]) for m in masks), residuals=tuple((r[0], r[1]) for r in residuals),
-        corners_dropped=dropped, view_threshold_px=float(view_thr) if view_thr is not None else float("nan"))
+        corners_dropped=dropped, view_threshold_px=float(view_thr) if view_thr is not None else float("nan"),
+        warp=state.warp.copy())

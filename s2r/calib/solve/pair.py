@@ -21,13 +21,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
-from s2r.calib.solve.joint import JointSolution, solve_joint
+from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
 from s2r.calib.solve.lens import LensModel, lens_model
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.rig import RigInit, check_rig, initial_rig, pair_consistency
 from s2r.errors import CalibrationError
 
-__all__ = ["PairSolution", "solve_pair"]
+__all__ = ["PairSolution", "solve_pair", "solve_pair_warped"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -43,7 +43,8 @@ class PairSolution:
     ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera);
     ``rms_all_px`` the RMS over every corner of the used views (rejected ones too) of ``corners_total``;
     ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers;
-    ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only)."""
+    ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only);
+    ``warp_m`` the board's bend (x, y; metres at the board centre) and its std when it was solved."""
 
     K1: FloatArray
     D1: FloatArray
@@ -73,6 +74,8 @@ class PairSolution:
     rejected_corners: tuple[tuple[int, int, int], ...] = ()
     cov_left: FloatArray | None = None
     cov_right: FloatArray | None = None
+    warp_m: FloatArray | None = None
+    warp_std_m: FloatArray | None = None
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -118,9 +121,10 @@ def _intrinsics_cov(sol: JointSolution, side: str, lens: LensModel) -> FloatArra
     return np.asarray(sol.cov[np.ix_(idx, idx)], np.float64)
 
 
-def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: LensModel,
-           max_error_px: float | None) -> PairSolution:
-    sol = solve_joint([obs[i] for i in keep], lens, init.joint_init(), max_view_error_px=max_error_px)
+def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointInit, lens: LensModel,
+           max_error_px: float | None, *, warp: bool = False) -> PairSolution:
+    start = init if isinstance(init, JointInit) else init.joint_init()
+    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp)
     u = sol.T / np.linalg.norm(sol.T)
     b_std = float(np.sqrt(max(0.0, float(u @ sol.translation_cov() @ u))))
     r_std = float(np.degrees(np.sqrt(max(0.0, float(np.trace(sol.rotation_cov()))))))
@@ -152,8 +156,11 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: L
         threshold_px=thr, outliers=outliers, mismatched=(), unobservable=sol.unobservable,
         residuals=tuple((r, q) for r, q in zip(rl, rr, strict=True)),  # type: ignore[misc]
         rvecs=tuple(sol.rvecs[j] for j in used), tvecs=tuple(sol.tvecs[j] for j in used),
+        warp_m=sol.warp.copy() if warp else None,
+        warp_std_m=np.array([sol.std("warp x"), sol.std("warp y")]) if warp else None,
         method="s2r calibrate: OpenCV calibrateCameraExtended per camera to initialise, then one joint "
-               f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics and board poses")
+               f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics, board poses"
+               + (" and the board's bend" if warp else ""))
 
 
 def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tuple[int, int], lens: LensModel,
@@ -197,6 +204,15 @@ def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tu
         rvecs=st.rvecs, tvecs=st.tvecs, rms_all_px=st.rms_px, corners_total=2 * len(obj) * len(keep),
         method="s2r calibrate --fix-intrinsics: OpenCV calibrateCameraExtended per camera, stereoCalibrate "
                "with CALIB_FIX_INTRINSIC (as ROS camera_calibration)")
+
+
+def solve_pair_warped(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,
+                      base: PairSolution, *, distortion: str, max_error_px: float | None = None) -> PairSolution:
+    """The joint solve of ``base``'s views (``left[i]``/``right[i]``, the views ``base`` kept, in its order)
+    with the board's bend also solved, started from ``base``."""
+    obs = _observations(names, left, right, obj)
+    init = JointInit(base.K1, base.D1, base.K2, base.D2, base.R, base.T, base.rvecs, base.tvecs)
+    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True)
 
 
 def solve_pair(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,

@@ -65,6 +65,7 @@ class FoldTask:
     test_rvecs: tuple[FloatArray, ...]
     test_tvecs: tuple[FloatArray, ...]
     max_view_error_px: float | None
+    warp: bool = False
 
 
 @dataclass(frozen=True)
@@ -133,8 +134,9 @@ def _fit_poses(state: SolveState, views: Sequence[StereoObservation], masks: lis
 
 def _heldout(task: FoldTask, sol: JointSolution) -> tuple[FloatArray, FloatArray]:
     """Squared corner errors (px^2) of the held-out views: (kept corners, all corners)."""
-    init = JointInit(sol.K1, sol.D1, sol.K2, sol.D2, sol.R, sol.T, task.test_rvecs, task.test_tvecs)
-    state = SolveState(task.lens, init)
+    init = JointInit(sol.K1, sol.D1, sol.K2, sol.D2, sol.R, sol.T, task.test_rvecs, task.test_tvecs,
+                     warp=sol.warp)
+    state = SolveState(task.lens, init, warp=task.warp, views=task.test)
     views = task.test
     masks: list[list[NDArray[np.bool_] | None]] = [
         [None if o is None else np.ones(len(o.ids), bool) for o in (v.left, v.right)] for v in views]
@@ -169,7 +171,7 @@ def run_fold(task: FoldTask) -> FoldOutcome:
     nan = np.full((3, 3), np.nan)
     try:
         sol = solve_joint(task.train, task.lens, task.init, max_view_error_px=task.max_view_error_px,
-                          rel_tol=_FOLD_TOL, covariance=False)
+                          rel_tol=_FOLD_TOL, covariance=False, warp=task.warp)
     except (CalibrationError, np.linalg.LinAlgError, cv2.error) as exc:
         return FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed=str(exc))
     sq_in, sq_all = _heldout(task, sol)

@@ -18,7 +18,7 @@ from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverag
 from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.calib.solve.models import ModelComparison
-from s2r.calib.solve.pair import PairSolution, solve_pair
+from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
 from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
 from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
@@ -102,6 +102,7 @@ class StereoCalibration:
     heldout: StereoHeldout | None = None
     board: str = ""
     projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
+    board_warp: dict[str, Any] | None = None
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -128,6 +129,7 @@ class StereoCalibration:
             "unobservable": [] if self.solution is None else list(self.solution.unobservable),
             "model_comparison": None if self.models is None else self.models.as_dict(),
             "board": self.board,
+            "board_warp": self.board_warp,
             "rms_all_px": None if self.solution is None else _nan_none(self.solution.rms_all_px),
             "corners_total": None if self.solution is None else self.solution.corners_total,
             "corners_rejected": None if self.solution is None else
@@ -243,9 +245,17 @@ def calibrate_stereo_detections(
                      fix_intrinsics=fix_intrinsics, square_m=square_m)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-    held, models = stereo_heldout([views.names[k] for k in keep], pl, pr, obj, sol, lens=lens_model(distortion),
-                                  compare=tuple(LENS_MODELS) if compare else (), max_error_px=max_error_px,
-                                  jobs=jobs or os.cpu_count() or 1)
+    names = [views.names[k] for k in keep]
+    warped = None if fix_intrinsics else solve_pair_warped(names, pl, pr, obj, sol, distortion=distortion,
+                                                           max_error_px=max_error_px)
+    held, models, held_w = stereo_heldout(
+        names, pl, pr, obj, sol, lens=lens_model(distortion), compare=tuple(LENS_MODELS) if compare else (),
+        max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1,
+        warped=None if warped is None else (([names[j] for j in warped.keep], [pl[j] for j in warped.keep],
+                                             [pr[j] for j in warped.keep]), warped))
+    sol, held, warp_figures = _choose_warp(sol, held, warped, held_w)
+    keep = [selected[i] for i in sol.keep]
+    pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
     sol = _with_reported_std(sol, held)
     dropped += [DroppedView(name=views.names[selected[i]], reason=why) for i, why in sol.mismatched]
     outliers = [ViewError(views.names[selected[i]], a, b, c, used=False, reason=why)
@@ -282,7 +292,7 @@ def calibrate_stereo_detections(
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
         verdict=verdict, heldout=held, board=board_text(pattern, square_m),
-        projection=projection_maps(sol, held, size, lens_model(distortion).free))
+        projection=projection_maps(sol, held, size, lens_model(distortion).free), board_warp=warp_figures)
 
 
 def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[int, int], free: Sequence[int]
@@ -296,6 +306,26 @@ def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[i
         out[side] = {"covariance": projection_map(K, D, size, draws, jackknife=False),
                      "jackknife": projection_map(K, D, size, folds, jackknife=True)}
     return out
+
+
+def _choose_warp(sol: PairSolution, held: StereoHeldout | None, warped: PairSolution | None,
+                 held_w: StereoHeldout | None) -> tuple[PairSolution, StereoHeldout | None, dict[str, Any] | None]:
+    """The flat-board or the bent-board solve, whichever has the lower stereo held-out error, and the bend's
+    figures (mm). ``warped``'s views are positions in ``sol``'s kept views; the result indexes like ``sol``."""
+    if warped is None or warped.warp_m is None:
+        return sol, held, None
+    used = held is not None and held_w is not None and held_w.heldout_px < held.heldout_px
+    std = warped.warp_std_m if warped.warp_std_m is not None else np.full(2, np.nan)
+    figures = {"used": used, "warp_mm": [float(v) * 1000 for v in warped.warp_m],
+               "warp_std_mm": [_nan_none(float(v) * 1000) for v in std],
+               "heldout_flat_px": None if held is None else held.heldout_px,
+               "heldout_warped_px": None if held_w is None else held_w.heldout_px}
+    if not used:
+        return sol, held, figures
+    m = sol.keep
+    return replace(warped, keep=tuple(m[j] for j in warped.keep), mismatched=sol.mismatched,
+                   outliers=sol.outliers + tuple((m[j], a, b, c, why) for j, a, b, c, why in warped.outliers),
+                   rejected_corners=tuple((m[j], a, b) for j, a, b in warped.rejected_corners)), held_w, figures
 
 
 def _merged(views: StereoViews) -> tuple[StereoViews, list[DroppedView]]:
