@@ -82,6 +82,7 @@ class FoldOutcome:
     failed: str = ""
     D1: FloatArray | None = None
     D2: FloatArray | None = None
+    warp: FloatArray | None = None
 
     def params(self) -> FloatArray:
         """``PARAMETERS`` but the rotation: fx fy cx cy per camera (px) and the baseline (m)."""
@@ -175,7 +176,8 @@ def run_fold(task: FoldTask) -> FoldOutcome:
     except (CalibrationError, np.linalg.LinAlgError, cv2.error) as exc:
         return FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed=str(exc))
     sq_in, sq_all = _heldout(task, sol)
-    return FoldOutcome(sol.K1, sol.K2, sol.R, sol.T, sq_in, sq_all, D1=sol.D1, D2=sol.D2)
+    return FoldOutcome(sol.K1, sol.K2, sol.R, sol.T, sq_in, sq_all, D1=sol.D1, D2=sol.D2,
+                       warp=sol.warp if task.warp else None)
 
 
 def run_folds(tasks: Sequence[FoldTask], *, jobs: int) -> list[FoldOutcome]:
