@@ -32,9 +32,8 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect.stream import process_pool
 from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
-from s2r.calib.solve.joint import _all_residuals as all_residuals
-from s2r.calib.solve.joint import _normal_equations as normal_equations
-from s2r.calib.solve.joint import _State as SolveState
+from s2r.calib.solve.jointterms import State as SolveState
+from s2r.calib.solve.jointterms import all_residuals, normal_equations
 from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError

@@ -19,15 +19,21 @@ from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.calib.solve.models import ModelComparison
 from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
-from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
+from s2r.calib.solve.projection import ProjectionMap
+from s2r.calib.solve.stereo_figures import (
+    board_text,
+    choose_warp,
+    dropped_warning,
+    merge_repeated_views,
+    projection_maps,
+    repeat_warning,
+    with_reported_std,
+)
 from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
 from s2r.calib.solve.views import (
     MIN_VIEWS,
-    REPEAT_PX,
-    StereoViews,
     check_sizes,
-    merge_repeats,
     no_board_error,
     select_diverse,
     stereo_views,
@@ -231,7 +237,7 @@ def calibrate_stereo_detections(
     if not any(d.status == "ok" for _, dl, dr in pairs for d in (dl, dr)):
         raise no_board_error(readable, pattern)
     dropped = [*extra_dropped, *views.dropped]
-    views, repeats = _merged(views)
+    views, repeats = merge_repeated_views(views)
     dropped += repeats
     if len(views.names) < MIN_VIEWS:
         raise too_few_error(len(views.names), dropped, pattern=pattern)
@@ -253,10 +259,10 @@ def calibrate_stereo_detections(
         max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1,
         warped=None if warped is None else (([names[j] for j in warped.keep], [pl[j] for j in warped.keep],
                                              [pr[j] for j in warped.keep]), warped))
-    sol, held, warp_figures = _choose_warp(sol, held, warped, held_w)
+    sol, held, warp_figures = choose_warp(sol, held, warped, held_w)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
-    sol = _with_reported_std(sol, held)
+    sol = with_reported_std(sol, held)
     dropped += [DroppedView(name=views.names[selected[i]], reason=why) for i, why in sol.mismatched]
     outliers = [ViewError(views.names[selected[i]], a, b, c, used=False, reason=why)
                 for i, a, b, c, why in sol.outliers]
@@ -270,7 +276,7 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*_repeat_warning(repeats), *_dropped_warning(dropped),
+    warnings = [*repeat_warning(repeats), *dropped_warning(dropped),
                 *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
@@ -295,83 +301,14 @@ def calibrate_stereo_detections(
         projection=projection_maps(sol, held, size, lens_model(distortion).free), board_warp=warp_figures)
 
 
-def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[int, int], free: Sequence[int]
-                    ) -> dict[str, dict[str, ProjectionMap | None]]:
-    """Per camera the projection uncertainty at 1 m from the covariance and from the jackknife folds."""
-    out: dict[str, dict[str, ProjectionMap | None]] = {}
-    for i, (side, K, D, cov) in enumerate((("left", sol.K1, sol.D1, sol.cov_left),
-                                           ("right", sol.K2, sol.D2, sol.cov_right))):
-        draws = [] if cov is None else covariance_samples(K, D, cov, free)
-        folds = [] if held is None or len(held.fold_intrinsics) <= i else list(held.fold_intrinsics[i])
-        out[side] = {"covariance": projection_map(K, D, size, draws, jackknife=False),
-                     "jackknife": projection_map(K, D, size, folds, jackknife=True)}
-    return out
 
 
-def _choose_warp(sol: PairSolution, held: StereoHeldout | None, warped: PairSolution | None,
-                 held_w: StereoHeldout | None) -> tuple[PairSolution, StereoHeldout | None, dict[str, Any] | None]:
-    """The flat-board or the bent-board solve, whichever has the lower stereo held-out error, and the bend's
-    figures (mm). ``warped``'s views are positions in ``sol``'s kept views; the result indexes like ``sol``."""
-    if warped is None or warped.warp_m is None:
-        return sol, held, None
-    used = held is not None and held_w is not None and held_w.heldout_px < held.heldout_px
-    std = warped.warp_std_m if warped.warp_std_m is not None else np.full(2, np.nan)
-    figures = {"used": used, "warp_mm": [float(v) * 1000 for v in warped.warp_m],
-               "warp_std_mm": [_nan_none(float(v) * 1000) for v in std],
-               "heldout_flat_px": None if held is None else held.heldout_px,
-               "heldout_warped_px": None if held_w is None else held_w.heldout_px}
-    if not used:
-        return sol, held, figures
-    m = sol.keep
-    return replace(warped, keep=tuple(m[j] for j in warped.keep), mismatched=sol.mismatched,
-                   outliers=sol.outliers + tuple((m[j], a, b, c, why) for j, a, b, c, why in warped.outliers),
-                   rejected_corners=tuple((m[j], a, b) for j, a, b in warped.rejected_corners)), held_w, figures
 
 
-def _merged(views: StereoViews) -> tuple[StereoViews, list[DroppedView]]:
-    """The views without repeats of an earlier view (a still board), and a DroppedView per repeat."""
-    keep, repeats = merge_repeats(views.names, views.left, views.right)
-    if not repeats:
-        return views, []
-    return replace(views, names=tuple(views.names[i] for i in keep), left=tuple(views.left[i] for i in keep),
-                   right=tuple(views.right[i] for i in keep)), repeats
 
 
-def _repeat_warning(repeats: Sequence[DroppedView]) -> list[str]:
-    if not repeats:
-        return []
-    return [f"{len(repeats)} view(s) repeat an earlier view (every corner within {REPEAT_PX} px: a board held "
-            "still); merged into it, so the std counts each board pose once"]
 
 
-def _dropped_warning(dropped: Sequence[DroppedView]) -> list[str]:
-    """One line when views with a board were dropped (outliers, mismatched pairs, a board in one image only)."""
-    valid = [d.name for d in dropped if d.reason.startswith(("outlier", "mismatched")) or "shows the board" in d.reason]
-    if not valid:
-        return []
-    named = ", ".join(valid[:8]) + (" ..." if len(valid) > 8 else "")
-    return [f"{len(valid)} view(s) with a board found were dropped: {named} (each reason is listed under dropped)"]
-
-
-def board_text(pattern: tuple[int, int], square_m: float) -> str:
-    """The chessboard used, in words (the summary and the report state it: every length scales with it)."""
-    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {square_m * 1000:g} mm squares"
-
-
-def _with_reported_std(sol: PairSolution, held: StereoHeldout | None) -> PairSolution:
-    """``sol`` with each std of the resampled parameters replaced by the larger of covariance and jackknife."""
-    if held is None:
-        return sol
-    left, right = sol.std_left.copy(), sol.std_right.copy()
-    for i, name in enumerate(("fx", "fy", "cx", "cy")):
-        for side, arr in (("left", left), ("right", right)):
-            value = held.std(f"{side} {name}").reported
-            if value is not None and np.isfinite(arr[i]):
-                arr[i] = value
-    b, r = held.std("baseline").reported, held.std("rotation").reported
-    return replace(sol, std_left=left, std_right=right,
-                   baseline_std_m=b if b is not None and np.isfinite(sol.baseline_std_m) else sol.baseline_std_m,
-                   rotation_std_deg=r if r is not None and np.isfinite(sol.rotation_std_deg) else sol.rotation_std_deg)
 
 
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
