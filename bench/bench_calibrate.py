@@ -20,9 +20,11 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
   detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
-  Issue 22: 0.65x before its changes (issue figure; 0.57x measured here before them, one run on a loaded
-  machine), 0.68x after (median of 3 on a machine at load 9-14 on 2 cores, where s2r's two detection workers
-  gain nothing): the resampling adds about 0.55 CPU-s (two processes) to the 0.2 s the plain script spends solving.
+  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them, one run on
+  a loaded machine); after them 0.62x whole run (plain 0.90 s, s2r 1.45 s; detection alone 1.60x, 0.85 s
+  against 0.53 s), median of 3 at load 2-5 on 2 cores. The solve part (0.9 s) is the joint solve, the bent-board
+  solve and 8 full + 16 small fold solves (held-out error, jackknife, lens models) on two processes, against
+  the plain script's 0.05 s of calibrateCamera and stereoCalibrate.
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
