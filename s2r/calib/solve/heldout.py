@@ -9,7 +9,7 @@ synthetic rig both agree. The lens models are compared on the same folds by thei
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import cv2
@@ -167,47 +167,43 @@ def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence
             for n, a, b in zip(names, left, right, strict=True)]
 
 
-Views = tuple[Sequence[str], Sequence[Corners], Sequence[Corners]]
-
-
 def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,
                    sol: PairSolution, *, lens: LensModel, compare: Sequence[str] = tuple(LENS_MODELS),
                    max_error_px: float | None = None, jobs: int = 1,
-                   warped: tuple[Views, PairSolution] | None = None
-                   ) -> tuple[StereoHeldout | None, ModelComparison | None, StereoHeldout | None]:
+                   warp_solve: Callable[[], PairSolution] | None = None
+                   ) -> tuple[StereoHeldout | None, ModelComparison | None, StereoHeldout | None, PairSolution | None]:
     """Held-out error and both std devs of the solved pair ``sol`` (its used views ``left``/``right``, in the
     order of ``sol.rvecs``), the lens models of ``compare`` scored on the same folds (None without one
     other model; on at most ``MAX_COMPARE_VIEWS`` evenly spaced pairs, every model on the same ones), and the
-    same figures of the ``warped`` solve (the board's bend solved; its own views) when given.
-    ``(None, None, None)`` when there are too few views for two folds."""
+    same figures with the board's bend solved, and that solve (``warp_solve``, run in the pool beside the folds;
+    its folds start from ``sol`` with a flat board) when given. All None when there are too few views for two
+    folds."""
     obs = _observations(names, left, right, obj)
     folds = split_folds(len(obs))
     if not folds:
-        return None, None, None
+        return None, None, None, None
     others = [m for m in compare if m != lens.name and m in LENS_MODELS]
     tasks = _tasks(obs, sol, lens, folds, max_error_px)
-    w_folds: list[list[int]] = []
-    if warped is not None:
-        w_obs = _observations(*warped[0], obj)
-        w_folds = split_folds(len(w_obs))
-        tasks += _tasks(w_obs, warped[1], lens, w_folds, max_error_px)
+    w_folds = folds if warp_solve is not None else []
+    if w_folds:
+        tasks += _tasks(obs, replace(sol, warp_m=np.zeros(2)), lens, w_folds, max_error_px)
     sub = np.unique(np.linspace(0, len(obs) - 1, min(len(obs), MAX_COMPARE_VIEWS)).round().astype(int))
     small = len(sub) < len(obs) and bool(others)
     sub_sol, sub_obs = (_subset(sol, sub), [obs[i] for i in sub]) if small else (sol, obs)
     sub_folds = split_folds(len(sub_obs)) if small else folds
     for m in ([lens.name] if small else []) + others:
         tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px)
-    outcomes = run_folds(tasks, jobs=jobs)
+    outcomes, warped = run_folds(tasks, jobs=jobs, side=warp_solve)
     k, kw = len(folds), len(w_folds)
     result = _summary(outcomes[:k], sol)
-    w_result = _summary(outcomes[k:k + kw], warped[1]) if warped is not None and kw else None
+    w_result = _summary(outcomes[k:k + kw], warped) if warped is not None and kw else None
     if not others or not sub_folds:
-        return result, None, w_result
+        return result, None, w_result, warped
     rest = outcomes[k + kw:] if small else [*outcomes[:k], *outcomes[k + kw:]]
     ks = len(sub_folds)
     scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]
-    return result, _comparison({m: scored[m] for m in order}, lens.name), w_result
+    return result, _comparison({m: scored[m] for m in order}, lens.name), w_result, warped
 
 
 def _subset(sol: PairSolution, idx: NDArray[np.int_]) -> PairSolution:

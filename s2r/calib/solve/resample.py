@@ -23,8 +23,9 @@ The fold solves run in parallel in s2r's process pool (:func:`s2r.calib.detect.s
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -42,6 +43,7 @@ __all__ = ["FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std", "r
            "split_folds"]
 
 FloatArray = NDArray[np.float64]
+T = TypeVar("T")
 #: Folds of the held-out error and the jackknife (as the issue's checker: 4 interleaved folds).
 FOLDS = 4
 #: Parameters whose jackknife std is reported, in this order (px; the baseline in metres, rotation in degrees).
@@ -179,13 +181,17 @@ def run_fold(task: FoldTask) -> FoldOutcome:
                        warp=sol.warp if task.warp else None)
 
 
-def run_folds(tasks: Sequence[FoldTask], *, jobs: int) -> list[FoldOutcome]:
-    """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1)."""
+def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | None = None
+              ) -> tuple[list[FoldOutcome], T | None]:
+    """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1), and the
+    result of ``side`` (a picklable call, submitted first so it runs beside the folds)."""
     if jobs <= 1 or len(tasks) <= 1:
-        return [run_fold(t) for t in tasks]
+        return [run_fold(t) for t in tasks], None if side is None else side()
     pool = process_pool(min(jobs, len(tasks)))
     try:
-        return list(pool.map(run_fold, tasks))
+        extra = None if side is None else pool.submit(side)
+        outcomes = list(pool.map(run_fold, tasks))
+        return outcomes, None if extra is None else extra.result()
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
 

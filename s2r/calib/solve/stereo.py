@@ -6,6 +6,7 @@ import logging
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -252,13 +253,11 @@ def calibrate_stereo_detections(
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
     names = [views.names[k] for k in keep]
-    warped = None if fix_intrinsics else solve_pair_warped(names, pl, pr, obj, sol, distortion=distortion,
-                                                           max_error_px=max_error_px)
-    held, models, held_w = stereo_heldout(
+    warp_solve = None if fix_intrinsics else partial(solve_pair_warped, names, pl, pr, obj, sol,
+                                                      distortion=distortion, max_error_px=max_error_px)
+    held, models, held_w, warped = stereo_heldout(
         names, pl, pr, obj, sol, lens=lens_model(distortion), compare=tuple(LENS_MODELS) if compare else (),
-        max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1,
-        warped=None if warped is None else (([names[j] for j in warped.keep], [pl[j] for j in warped.keep],
-                                             [pr[j] for j in warped.keep]), warped))
+        max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1, warp_solve=warp_solve)
     sol, held, warp_figures = choose_warp(sol, held, warped, held_w)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
