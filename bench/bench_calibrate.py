@@ -1,7 +1,7 @@
 """Benchmark `s2r calibrate` against a plain sequential OpenCV loop, side by side in one run.
 
 Data: 100 synthetic 1280x720 stereo pairs (80 with a 9x6 board, 20 without), made by warping a board
-texture through a known rig (s2r.calib.synth), cached under $TMPDIR/s2r_bench_calibrate.
+texture through a known rig (s2r.calib.solve.synth), cached under $TMPDIR/s2r_bench_calibrate.
 
 Plain OpenCV: for each image findChessboardCorners (the stereo_calib sample's flags ADAPTIVE_THRESH |
 NORMALIZE_IMAGE, and a second run adding FAST_CHECK) + cornerSubPix 11x11 at full resolution; then
@@ -18,7 +18,13 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   cornerSubPix 11x11) against s2r's detection stream (no cache, --jobs processes), boards found by each;
 - whole run: the plain loop plus calibrateCamera per camera and stereoCalibrate (k1 k2 p1 p2, k3 fixed, as
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
-  detection, checks, the joint solve and the held-out model comparison).
+  detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
+  held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
+  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them, one run on
+  a loaded machine); after them 0.62x whole run (plain 0.90 s, s2r 1.45 s; detection alone 1.60x, 0.85 s
+  against 0.53 s), median of 3 at load 2-5 on 2 cores. The solve part (0.9 s) is the joint solve, the bent-board
+  solve and 8 full + 16 small fold solves (held-out error, jackknife, lens models) on two processes, against
+  the plain script's 0.05 s of calibrateCamera and stereoCalibrate.
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
@@ -40,7 +46,7 @@ import numpy as np
 
 from s2r.calib import calibrate_stereo
 from s2r.calib.detect import DetectItem, detect_stream
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, StereoProfile
 
 PATTERN, SQUARE = (9, 6), 0.025

@@ -15,7 +15,7 @@ Kalibr's field names) or a ChArUco board with ``cv2.aruco.CharucoBoard``'s argum
   corners (bottom-left, bottom-right, top-right, top-left) are ids ``b, b + 1, b + 2 tagCols + 1,
   b + 2 tagCols`` with ``b = (t // tagCols) 4 tagCols + (t % tagCols) 2``.
 
-cv2-free: the detectors (:mod:`s2r.calib.markers`) and the renderer build OpenCV objects from these fields.
+cv2-free: the detectors (:mod:`s2r.calib.detect.markers`) and the renderer build OpenCV objects from these fields.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.integer[Any]]
 
-#: Revision of the corner detectors of file-described targets (s2r.calib.markers), part of the corner cache's
+#: Revision of the corner detectors of file-described targets (s2r.calib.detect.markers), part of the corner cache's
 #: key: bumped when their output changes, so cached detections of an older detector are not reused.
 DETECTOR_REVISION = 2
 

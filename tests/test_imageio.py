@@ -51,7 +51,7 @@ def test_depth_cli_stderr_is_one_s2r_line(tmp_path: Path, name: str) -> None:
 
 
 def test_calibration_reports_a_corrupt_view_once(tmp_path: Path) -> None:
-    from s2r.calib.detect import DetectItem, _detect_item
+    from s2r.calib.detect.stream import DetectItem, _detect_item
 
     files = _bad_files(tmp_path)
     detection = _detect_item(DetectItem("crc", "0" * 64, files["crc.png"]), (9, 6))

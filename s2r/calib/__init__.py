@@ -6,13 +6,13 @@ solves with outlier rejection and uncertainties, coverage figures and an HTML re
 :class:`StereoCalibration` whose ``profile`` is a real :class:`~s2r.profile.StereoProfile`.
 """
 
-from s2r.calib.bags import calibrate_stereo_bag
-from s2r.calib.coverage import Coverage, PoseSpread
 from s2r.calib.detect import CornerCache, Detection, detect_board
-from s2r.calib.inputs import PairSet, find_mono_images, find_stereo_pairs
-from s2r.calib.mono import MonoCalibration, calibrate_mono
-from s2r.calib.stereo import StereoCalibration, ViewError, calibrate_stereo
-from s2r.calib.views import MAX_SOLVE_VIEWS, MIN_VIEWS, match_corner_order
+from s2r.calib.detect.coverage import Coverage, PoseSpread
+from s2r.calib.detect.inputs import PairSet, find_mono_images, find_stereo_pairs
+from s2r.calib.solve.mono import MonoCalibration, calibrate_mono
+from s2r.calib.solve.stereo import StereoCalibration, ViewError, calibrate_stereo
+from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+from s2r.calib.solve.views import MAX_SOLVE_VIEWS, MIN_VIEWS, match_corner_order
 
 __all__ = [
     "MAX_SOLVE_VIEWS",

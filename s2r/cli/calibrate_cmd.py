@@ -14,7 +14,7 @@ from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
 __all__ = ["register"]
 
 EXIT_OK = 0
-#: s2r.calib.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+#: s2r.calib.solve.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
 DEFAULT_LENS = "k1k2p1p2"
 
 
@@ -27,8 +27,10 @@ def register(sub: Any) -> None:
     p.add_argument("input", nargs="?", type=Path,
                    help="folder with left/ and right/ (or cam0/ cam1/, image_0/ image_1/) subfolders, or "
                         "with leftNN/rightNN image files")
-    p.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6)")
-    p.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
+    p.add_argument("--pattern", default=None,
+                   help="chessboard inner corners COLSxROWS, e.g. 9x6 (required unless --target)")
+    p.add_argument("--square", type=float, default=None,
+                   help="square edge in metres, e.g. 0.025 (required unless --target: every length scales with it)")
     p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
@@ -81,7 +83,26 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
     return lens, None
 
 
+def _required_board(args: argparse.Namespace) -> None:
+    """No silent board: a chessboard needs ``--square`` and ``--pattern`` (a ``--target`` file has both)."""
+    if args.target is not None:
+        return
+    if args.square is None:
+        raise CalibrationError("the square size is required: every length (baseline, board distance) scales with "
+                               "it", field="--square", hint="measure one square edge of the printed board, e.g. "
+                                                            "--square 0.025 for 25 mm (or describe it with --target)")
+    if args.pattern is None:
+        raise CalibrationError("the chessboard is required", field="--pattern",
+                               hint="give its inner corners COLSxROWS, e.g. --pattern 9x6 for a board of 10x7 "
+                                    "squares (or describe the board with --target FILE)")
+
+
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
+    _required_board(args)
+    if args.target is not None and args.pattern is None:
+        args.pattern = "9x6"  # unused: the target file describes the board
+    if args.target is not None and args.square is None:
+        args.square = 0.025  # unused: the target file gives its spacing
     try:
         pattern = parse_pattern(args.pattern)
     except ValueError as exc:
@@ -129,23 +150,23 @@ def run(args: argparse.Namespace) -> int:
     if target is not None:
         result = _run_target(args, target, lens, common)
     elif args.mono:
-        from s2r.calib.inputs import find_mono_images
-        from s2r.calib.mono import calibrate_mono
+        from s2r.calib.detect.inputs import find_mono_images
+        from s2r.calib.solve.mono import calibrate_mono
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
                                    hint="export the images to a folder first")
         result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
     elif args.bag is not None:
-        from s2r.calib.bags import calibrate_stereo_bag
+        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
         result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
                                       max_dt_s=args.max_dt, every=args.every,
                                       fix_intrinsics=args.fix_intrinsics, swap=args.swap,
                                       **common)
     else:
-        from s2r.calib.inputs import find_stereo_pairs
-        from s2r.calib.stereo import calibrate_stereo
+        from s2r.calib.detect.inputs import find_stereo_pairs
+        from s2r.calib.solve.stereo import calibrate_stereo
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
         result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
@@ -158,11 +179,18 @@ def run(args: argparse.Namespace) -> int:
             write_calibration_report(result, args.report / "index.html", batch=batch)
         batch.publish()
     if args.json:
-        print_json({**result.figures(), "output": str(out),
+        print_json({**result.figures(), "board": _board_of(args, target, pattern), "output": str(out),
                     "report": None if args.report is None else str(args.report / "index.html")})
     else:
-        _print_summary(result, out)
+        _print_summary({**result.figures(), "board": _board_of(args, target, pattern)}, out)
     return EXIT_OK
+
+
+def _board_of(args: argparse.Namespace, target: Any, pattern: tuple[int, int]) -> str:
+    """The board used, in words (stated by the summary, the JSON and the report)."""
+    if target is not None and args.target is not None:
+        return f"{target.describe()} (from {args.target})"
+    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {args.square * 1000:g} mm squares"
 
 
 def _pm(value: float, sd: float | None, digits: int = 2) -> str:
@@ -176,29 +204,28 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
     kw.update(target=target, lens=lens,
               distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
     if args.mono:
-        from s2r.calib.inputs import find_mono_images
-        from s2r.calib.target_stereo import calibrate_mono_target
+        from s2r.calib.detect.inputs import find_mono_images
+        from s2r.calib.solve.target_stereo import calibrate_mono_target
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
                                    hint="export the images to a folder first")
         return calibrate_mono_target(find_mono_images(args.input, image_glob=args.left), **kw)
     if args.bag is not None:
-        from s2r.calib.bags import calibrate_stereo_bag
+        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
         return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
                                     max_dt_s=args.max_dt, every=args.every, fix_intrinsics=args.fix_intrinsics,
                                     swap=args.swap, **common, target=target, lens=lens)
-    from s2r.calib.inputs import find_stereo_pairs
-    from s2r.calib.target_stereo import calibrate_stereo_target
+    from s2r.calib.detect.inputs import find_stereo_pairs
+    from s2r.calib.solve.target_stereo import calibrate_stereo_target
 
     pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
     return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
                                    fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
 
 
-def _print_summary(result: Any, out: Path) -> None:
-    figures = result.figures()
+def _print_summary(figures: dict[str, Any], out: Path) -> None:
     q = figures["quality"] or {}
     verdict = figures.get("verdict")
     if verdict:
@@ -206,6 +233,8 @@ def _print_summary(result: Any, out: Path) -> None:
         print(f"verdict: {verdict['level'].upper()}" + (f" ({'; '.join(flagged)})" if flagged else ""))
     print(f"wrote {out}: {q.get('views_used')} views used, {len(figures['dropped'])} skipped or dropped, "
           f"lens model {q.get('distortion_terms')}")
+    if figures.get("board"):
+        print(f"  board: {figures['board']}")
     cams = [("camera", figures["camera"])] if "camera" in figures else [("left", figures["left"]),
                                                                          ("right", figures["right"])]
     for label, cam in cams:
@@ -221,11 +250,39 @@ def _print_summary(result: Any, out: Path) -> None:
               f"{q.get('rms_stereo_px', 0):.3f} px, epipolar {q.get('epipolar_rms_px', 0):.3f} px")
     else:
         print(f"  RMS {q.get('rms_left_px', 0):.3f} px")
+    _print_honest(figures)
     models = figures.get("model_comparison")
     if models:
-        print("  held-out error: " + ", ".join(
+        print("  held-out error by lens model: " + ", ".join(
             f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
             + " px (* used)")
     for d in figures["dropped"]:
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
         print(f"  skipped {terminal_safe(d['name'])}{rms}: {terminal_safe(d['reason'])}")
+    for g in figures.get("rejected_corner_groups") or []:
+        print(f"  corners left out of {terminal_safe(g['name'])}: {g['left']} left, {g['right']} right "
+              f"({terminal_safe(g['reason'])})")
+
+
+def _print_honest(figures: dict[str, Any]) -> None:
+    """The stereo held-out error, RMS over all corners beside the inlier RMS, and where each std comes from."""
+    if figures.get("rms_all_px") is not None and figures.get("corners_total"):
+        q = figures["quality"] or {}
+        print(f"  RMS {q.get('rms_stereo_px', 0):.3f} px over the inlier corners, {figures['rms_all_px']:.3f} px over "
+              f"all {figures['corners_total']} ({figures['corners_rejected']} rejected as outliers)")
+    warp = figures.get("board_warp")
+    if warp:
+        sd = [f"±{v:.2g}" if v is not None else "±?" for v in warp["warp_std_mm"]]
+        state = "used: it lowers" if warp["used"] else "not used: it does not lower"
+        print(f"  board bend x {warp['warp_mm'][0]:+.3f}{sd[0]} mm, y {warp['warp_mm'][1]:+.3f}{sd[1]} mm ({state} the "
+              f"stereo held-out error, {warp['heldout_flat_px']:.3f} px flat, {warp['heldout_warped_px']:.3f} px bent)")
+    held = figures.get("stereo_heldout")
+    if not held:
+        return
+    print(f"  stereo held-out error {held['heldout_px']:.3f} px over the inlier corners of pairs left out "
+          f"({held['folds']} folds; {held['heldout_all_px']:.3f} px over all, {held['corners_rejected']} of "
+          f"{held['corners_total']} corners rejected)")
+    params = held["parameters"]
+    jk = [n for n, p in params.items() if p["std_source"] == "jackknife"]
+    print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
+          + (", ".join(jk) if jk else "none") + " (both in --json)")

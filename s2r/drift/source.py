@@ -83,7 +83,7 @@ def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
 
 
 def _bag_pairs(source: StereoSource) -> Iterator[GreyPair]:
-    from s2r.calib.bags import open_bag, paired_bag_frames
+    from s2r.calib.detect.bags import open_bag, paired_bag_frames
 
     assert source.bag is not None
     if not source.left_topic or not source.right_topic:

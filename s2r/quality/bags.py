@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.bags import bag_image_topics, image_from_message, open_bag
+from s2r.calib.detect.bags import bag_image_topics, image_from_message, open_bag
 from s2r.errors import DepthError
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, depth_from_array
 

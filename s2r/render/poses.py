@@ -30,7 +30,7 @@ MIN_FRONTAL_SQUARE_PX, MIN_SQUARE_PX = 12.0, 8.0
 MIN_TILT_DEG, MAX_TILT_DEG, MAX_VIEW_ANGLE_DEG = 30.0, 45.0, 70.0
 #: In-plane roll range: never near 0, because pixel-aligned edges alias worst (no anti-aliasing).
 MIN_ROLL_DEG, MAX_ROLL_DEG = 8.0, 30.0
-#: Image cells (columns, rows) of the coverage check in :mod:`s2r.calib.coverage`; corner views aim to put
+#: Image cells (columns, rows) of the coverage check in :mod:`s2r.calib.detect.coverage`; corner views aim to put
 #: inner corners in the 2x2 cells at each image corner of both cameras.
 COVERAGE_GRID = (8, 6)
 #: Corner views: tilt range (degrees, far edge at the image corner) and candidates tried per view.

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.profile import StereoProfile
 from tests.conftest import make_rig
 

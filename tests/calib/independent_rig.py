@@ -106,16 +106,27 @@ def _random_pose(rng: np.random.Generator, lens: Lens) -> tuple[Array, Array]:
     return R, target - R @ centre
 
 
+def bent_board(bend_m: tuple[float, float]) -> Array:
+    """The board's corners bent into a parabola along each axis: z = bx (1 - u^2) + by (1 - v^2) metres, with
+    u, v running -1..1 across the corners (the bend at the centre, as mrcal models a board's warp)."""
+    board = board_points()
+    u = 2 * board[:, 0] / board[:, 0].max() - 1
+    v = 2 * board[:, 1] / board[:, 1].max() - 1
+    board[:, 2] = bend_m[0] * (1 - u ** 2) + bend_m[1] * (1 - v ** 2)
+    return board
+
+
 def make_rig(seed: int, *, views: int = 20, noise_px: float = 0.07, k3_max: float = 0.02,
-             tangential_max: float = 5e-4) -> Rig:
-    """A random rig with ``views`` noisy board observations in both cameras (seeded)."""
+             tangential_max: float = 5e-4, bend_m: tuple[float, float] = (0.0, 0.0)) -> Rig:
+    """A random rig with ``views`` noisy board observations in both cameras (seeded); ``bend_m``: the printed
+    board is not flat (see :func:`bent_board`)."""
     rng = np.random.default_rng(seed)
     left, right = random_lens(rng, k3_max=k3_max, tangential_max=tangential_max), \
         random_lens(rng, k3_max=k3_max, tangential_max=tangential_max)
     R = rotation(rng.uniform(-0.02, 0.02, size=3))
     centre_right = np.array([rng.uniform(0.06, 0.12), rng.uniform(-0.003, 0.003), rng.uniform(-0.003, 0.003)])
     T = -R @ centre_right
-    board = board_points()
+    board = bent_board(bend_m)
     obs_l: list[Array] = []
     obs_r: list[Array] = []
     tries = 0

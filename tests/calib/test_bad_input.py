@@ -15,7 +15,7 @@ from tests.calib.conftest import copy_pairs
 
 
 def _run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(["calibrate", *args, "--jobs", "1"])
+    code = main(["calibrate", "--pattern", "9x6", "--square", "0.025", *args, "--jobs", "1"])
     out, err = capsys.readouterr()
     return code, out, err
 
@@ -39,8 +39,11 @@ def test_images_without_board_are_listed(small_set: Path, tmp_path: Path, capsys
     _blank(small_set / "left" / "02.png")
     code, out, _ = _run(capsys, str(small_set), "-o", str(tmp_path / "out.yaml"), "--json")
     assert code == 0
-    dropped = {d["name"]: d["reason"] for d in json.loads(out)["dropped"]}
-    assert dropped["left/02.png"] == "no board: no 9x6 chessboard found"
+    figures = json.loads(out)
+    dropped = {d["name"]: d["reason"] for d in figures["dropped"]}
+    assert dropped["left/02.png"] == ("no board: no 9x6 chessboard found; its partner right/02.png shows the board, "
+                                      "so the pair is dropped")
+    assert any("with a board found were dropped: left/02.png" in w for w in figures["warnings"])
 
 
 def test_left_without_partner_is_named(small_set: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -78,7 +81,8 @@ def test_too_few_pairs_says_how_many_and_why(small_set: Path, tmp_path: Path,
 def test_wrong_pattern_suggests_checking_inner_corners(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
     folder = copy_pairs(synthetic_set[0], tmp_path / "set", range(3))  # OpenCV needs ~1 s per image here
-    code = main(["calibrate", str(folder), "-o", str(tmp_path / "out.yaml"), "--pattern", "10x7", "--jobs", "2"])
+    code = main(["calibrate", str(folder), "-o", str(tmp_path / "out.yaml"), "--pattern", "10x7", "--square", "0.025",
+                 "--jobs", "2"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
     assert "--pattern" in err and "INNER corners" in err and "no 10x7 chessboard found" in err
@@ -108,3 +112,13 @@ def test_glob_matching_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str
     code, _, err = _run(capsys, "--left", str(tmp_path / "*.png"), "--right", str(tmp_path / "r*.png"),
                         "-o", str(tmp_path / "out.yaml"))
     assert code == 2 and "--left glob matches no image files" in err
+
+
+@pytest.mark.parametrize(("args", "named"), [(["--pattern", "9x6"], "--square"), ([], "--square"),
+                                             (["--square", "0.025"], "--pattern")])
+def test_no_silent_board(small_set: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str],
+                         named: str) -> None:
+    out = tmp_path / "out.yaml"
+    code = main(["calibrate", str(small_set), "-o", str(out), *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and named in err and len(err.splitlines()) == 1 and not out.exists()

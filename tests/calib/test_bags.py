@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from s2r.calib.bags import calibrate_stereo_bag
+from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 from s2r.cli import main
 from s2r.profile import StereoProfile
 
@@ -79,7 +79,7 @@ def test_bag_every_and_max_dt(synthetic_set: tuple[Path, StereoProfile], tmp_pat
                               capsys: pytest.CaptureFixture[str]) -> None:
     bag = write_bag(tmp_path / "cal.bag", synthetic_set[0], kind="ros1", pairs=12)
     args = ["calibrate", "--bag", str(bag), "--left-topic", "/stereo/left/image_raw", "--right-topic",
-            "/stereo/right/image_raw", "--json", "--jobs", "1"]
+            "/stereo/right/image_raw", "--json", "--jobs", "1", "--pattern", "9x6", "--square", "0.025"]
     assert main([*args, "-o", str(tmp_path / "a.yaml"), "--every", "2", "--report", str(tmp_path / "rep")]) == 0
     assert len(json.loads(capsys.readouterr().out)["views"]) == 6
     page = (tmp_path / "rep" / "index.html").read_text()
@@ -93,7 +93,7 @@ def test_bag_without_the_topics_lists_its_image_topics(synthetic_set: tuple[Path
                                                        capsys: pytest.CaptureFixture[str]) -> None:
     bag = write_bag(tmp_path / "cal.bag", synthetic_set[0], kind="ros1", pairs=1)
     code = main(["calibrate", "--bag", str(bag), "--left-topic", "/left/image", "--right-topic",
-                 "/stereo/right/image_raw", "-o", str(tmp_path / "out.yaml")])
+                 "/stereo/right/image_raw", "-o", str(tmp_path / "out.yaml"), "--pattern", "9x6", "--square", "0.025"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
     assert "no image topic '/left/image'" in err and "/stereo/left/image_raw, /stereo/right/image_raw" in err
@@ -104,6 +104,6 @@ def test_unreadable_bag_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[s
     bad = tmp_path / "broken.bag"
     bad.write_bytes(b"not a bag")
     code = main(["calibrate", "--bag", str(bad), "--left-topic", "/l", "--right-topic", "/r",
-                 "-o", str(tmp_path / "out.yaml")])
+                 "-o", str(tmp_path / "out.yaml"), "--pattern", "9x6", "--square", "0.025"])
     err = capsys.readouterr().err
     assert code == 2 and "broken.bag" in err and "cannot read the bag" in err

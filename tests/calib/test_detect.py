@@ -7,9 +7,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from s2r.calib.detect import CornerCache, DetectItem, detect_board, detect_stream, refine_window
-from s2r.calib.synth import CameraWarper, board_object_points, board_texture, random_board_poses
-from s2r.calib.views import match_corner_order
+from s2r.calib.detect import CornerCache, DetectItem, detect_board, detect_stream
+from s2r.calib.detect.chessboard import refine_window
+from s2r.calib.solve.synth import CameraWarper, board_object_points, board_texture, random_board_poses
+from s2r.calib.solve.views import match_corner_order
 from s2r.fileio import sha256_file
 from s2r.profile import StereoProfile
 from tests.calib.conftest import distorted_truth

@@ -22,6 +22,9 @@ from s2r.cli import main
 from s2r.formats.s2r_yaml import load_profile_file
 from tests.calib.image_rig import PATTERN, ImageRig, render_rig, sigma_ratios
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 pytestmark = pytest.mark.slow  # renders 40 images (about 20 s on an idle core)
 SEED = 11
 VIEWS = 20
@@ -65,7 +68,7 @@ def test_default_calibration_meets_the_issue_bars_with_honest_sigma(image_rig: t
                                                                     capsys: pytest.CaptureFixture[str]) -> None:
     folder, truth = image_rig
     out = tmp_path / "rig.yaml"
-    assert main(["calibrate", str(folder), "-o", str(out), "--json", "--jobs", "1", "--no-cache"]) == 0
+    assert main(["calibrate", *BOARD, str(folder), "-o", str(out), "--json", "--jobs", "1", "--no-cache"]) == 0
     figures = json.loads(capsys.readouterr().out)
     p = load_profile_file(out)
     q = p.provenance.calibration

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from s2r.calib.inputs import find_mono_images, find_stereo_pairs, pair_by_number
+from s2r.calib.detect.inputs import find_mono_images, find_stereo_pairs, pair_by_number
 from s2r.errors import CalibrationError
 
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import Detection
-from s2r.calib.joint import JointInit, solve_joint
-from s2r.calib.lens import LENS_MODELS
-from s2r.calib.observations import BoardObservation, StereoObservation, chessboard_observation
-from s2r.calib.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.joint import JointInit, solve_joint
+from s2r.calib.solve.lens import LENS_MODELS
+from s2r.calib.solve.observations import BoardObservation, StereoObservation, chessboard_observation
+from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 
@@ -136,7 +136,7 @@ def test_model_comparison_marks_the_chosen_model_and_warns_without_switching() -
     res = _calibrate(make_rig(61, views=12, tangential_max=3e-3), distortion="k1k2", compare=True)
     assert res.models is not None and [s.model for s in res.models.scores if s.chosen] == ["k1k2"]
     assert res.models.best in ("k1k2p1p2", "plumb_bob", "rational")
-    assert any("held-out views favour --distortion" in w for w in res.warnings)
+    assert any("held-out pairs favour --distortion" in w for w in res.warnings)
     assert res.profile.provenance.calibration is not None
     assert res.profile.provenance.calibration.distortion_terms == "k1k2"  # no silent switching
     figures = res.figures()["model_comparison"]

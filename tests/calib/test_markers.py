@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from s2r.calib.detect import CornerCache, Detection
-from s2r.calib.markers import detect_target
+from s2r.calib.detect.markers import detect_target
 from s2r.targets import target_from_mapping
 from tests import raycast as rc
 

@@ -11,6 +11,9 @@ from s2r.cli import main
 from s2r.formats.s2r_yaml import load_profile_file
 from tests.conftest import shared_data
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 pytestmark = pytest.mark.slow
 
 
@@ -36,7 +39,8 @@ def test_real_set_calibrates_like_opencv(tmp_path: Path, capsys: pytest.CaptureF
     assert abs(profile.left.fx_px - 536.0) <= 0.005 * 536.0 and abs(profile.baseline_m - 0.0832) <= 0.001
     assert figures["verdict"]["level"] in ("good", "check") and figures["model_comparison"]["best"]
     # rational: never a crash nor a NaN std (unobservable terms are named, their std unknown)
-    code = main(["-q", "calibrate", str(data), "-o", str(tmp_path / "rational.yaml"), "--distortion", "rational",
+    code = main(["-q", "calibrate", *BOARD, str(data), "-o", str(tmp_path / "rational.yaml"),
+                 "--distortion", "rational",
                  "--json", "--jobs", "2"])
     rational = json.loads(capsys.readouterr().out)
     assert code == 0 and "NaN" not in json.dumps(rational)
@@ -65,18 +69,20 @@ def test_classic_mistakes_exit_2_with_one_line(tmp_path: Path, capsys: pytest.Ca
     data = shared_data("opencv_stereo_chessboard")
     folder = _copy_set(data, tmp_path / "set", swap=case == "swapped", same=case == "identical")
     square = "25" if case == "millimetres" else "0.025"
-    code = main(["calibrate", str(folder), "--square", square, "-o", str(tmp_path / "x.yaml"), "--jobs", "2"])
+    code = main(["calibrate", str(folder), "--pattern", "9x6", "--square", square, "-o", str(tmp_path / "x.yaml"),
+                 "--jobs", "2"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and message in err[-1] and "Traceback" not in "\n".join(err)
     if case == "swapped":
-        assert main(["-q", "calibrate", str(folder), "-o", str(tmp_path / "s.yaml"), "--swap", "--jobs", "2"]) == 0
+        assert main(["-q", "calibrate", *BOARD, str(folder), "-o", str(tmp_path / "s.yaml"),
+                     "--swap", "--jobs", "2"]) == 0
         assert load_profile_file(tmp_path / "s.yaml").T[0] < 0
 
 
 def test_shuffled_right_images_are_named_and_dropped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     data = shared_data("opencv_stereo_chessboard")
     folder = _copy_set(data, tmp_path / "set", {"01": "07", "03": "01", "05": "03", "07": "05"})
-    assert main(["calibrate", str(folder), "-o", str(tmp_path / "x.yaml"), "--json", "--jobs", "2"]) == 0
+    assert main(["calibrate", *BOARD, str(folder), "-o", str(tmp_path / "x.yaml"), "--json", "--jobs", "2"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert {d["name"] for d in figures["dropped"] if d["reason"].startswith("mismatched")} == {"01", "03", "05", "07"}
     assert abs(figures["baseline_m"] - 0.0832) < 0.002

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from s2r.calib.coverage import coverage_of, coverage_warnings
-from s2r.calib.solve import distortion_flags, outlier_threshold
+from s2r.calib.detect.coverage import coverage_of, coverage_warnings
+from s2r.calib.solve.cvsolve import distortion_flags, outlier_threshold
 from s2r.errors import CalibrationError
 
 
@@ -39,7 +39,7 @@ def test_unknown_distortion_model_is_refused() -> None:
 
 
 def test_diverse_selection_keeps_every_region_of_a_large_set() -> None:
-    from s2r.calib.views import select_diverse
+    from s2r.calib.solve.views import select_diverse
 
     rng = np.random.default_rng(1)
     grid = (np.mgrid[0:9, 0:6].T.reshape(-1, 2) * 20.0).astype(np.float32)

@@ -57,7 +57,7 @@ def test_kalibr_checkerboard_spacings(tmp_path: Path) -> None:
 def test_charuco_points_match_opencv(tmp_path: Path) -> None:
     import cv2
 
-    from s2r.calib.markers import charuco_board
+    from s2r.calib.detect.markers import charuco_board
 
     t = load_target(_write(tmp_path, CHARUCO))
     assert isinstance(t, CharucoTarget)

@@ -23,7 +23,7 @@ def test_bad_target_or_lens_is_one_line(tmp_path: Path, capsys: pytest.CaptureFi
     bad.write_text("target_type: aprilgrid\ntagCols: 6\ntagRows: 6\ntagSize: 0\ntagSpacing: 0.3\n")
     args = [a.format(bad=bad, missing=tmp_path / "none.yaml") for a in args]
     out = tmp_path / "rig.yaml"
-    code = main(["calibrate", str(tmp_path), "-o", str(out), *args])
+    code = main(["calibrate", str(tmp_path), "-o", str(out), "--pattern", "9x6", "--square", "0.025", *args])
     err = capsys.readouterr().err.strip()
     assert code == 2 and field in err and len(err.splitlines()) == 1 and "Traceback" not in err
     assert not out.exists()

@@ -13,6 +13,9 @@ from pathlib import Path
 
 from s2r.calib.detect import DETECTOR_VERSION, CornerCache
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 
 def _children(pid: int) -> list[int]:
     found = []
@@ -39,7 +42,7 @@ def test_kill_9_of_calibrate_leaves_no_orphan_worker(small_set: Path, tmp_path: 
         for image in sorted((small_set / side).glob("*.png")):
             for copy in range(1, 8):
                 shutil.copy(image, image.with_name(f"{copy}{image.name}"))
-    cmd = [sys.executable, "-m", "s2r", "calibrate", str(small_set), "--jobs", "2", "--no-cache", "-o",
+    cmd = [sys.executable, "-m", "s2r", "calibrate", *BOARD, str(small_set), "--jobs", "2", "--no-cache", "-o",
            str(tmp_path / "out.yaml")]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from s2r.calib.bagfiles import bag_storage_files
+from s2r.calib.detect.bagfiles import bag_storage_files
 from s2r.errors import CalibrationError
 from tests.hostile._limits import run_s2r
 

@@ -15,6 +15,9 @@ from s2r.formats.s2r_yaml import load_profile_file
 from s2r.profile import Camera, StereoProfile
 from tests.sources.rigs import FIXED_URDF, sensor, two_camera_urdf, write
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 REPO = Path(__file__).resolve().parents[2]
 PROFILE = REPO / "profiles" / "real" / "realsense_d435_848x480.yaml"
 
@@ -187,6 +190,6 @@ def test_calibrate_checks_output_before_any_work(tmp_path: Path, capsys: pytest.
     else:
         out.symlink_to(tmp_path / "target.yaml")
     (tmp_path / "images").mkdir()  # an empty input: the output is refused before the input is even read
-    err = _one_error(["calibrate", str(tmp_path / "images"), "-o", str(out)], capsys)
+    err = _one_error(["calibrate", *BOARD, str(tmp_path / "images"), "-o", str(out)], capsys)
     assert str(out) in err and "image" not in err.split(str(out), 1)[1].split("(")[0]
     assert not (tmp_path / "out.yaml.corners").exists()

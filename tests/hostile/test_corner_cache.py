@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import CornerCache, Detection
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.cli import main
 from s2r.targets import CharucoTarget
 from tests.conftest import make_rig

@@ -11,7 +11,7 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from s2r.calib.cache import validate_entry
+from s2r.calib.detect.cache import validate_entry
 from s2r.errors import S2RError, terminal_safe
 from s2r.fileio import parse_yaml
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.cli import main
 from s2r.errors import OutputExistsError, S2RError
 from s2r.fileio import TEMP_PREFIX, OutputBatch, atomic_write_text

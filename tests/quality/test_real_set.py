@@ -13,6 +13,9 @@ import pytest
 from s2r.cli import main
 from tests.conftest import shared_data
 
+#: The board of these sets (`calibrate` has no default board).
+BOARD = ("--pattern", "9x6", "--square", "0.025")
+
 pytestmark = pytest.mark.slow
 
 

@@ -1,5 +1,5 @@
 """Rendered calibration sets cover the image corners of both cameras, span enough tilt, and still calibrate
-to the profile they were rendered from (the checks of ``s2r calibrate``: s2r.calib.coverage)."""
+to the profile they were rendered from (the checks of ``s2r calibrate``: s2r.calib.detect.coverage)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from s2r.calib import calibrate_stereo
-from s2r.calib.coverage import PoseSpread, coverage_of, coverage_warnings
+from s2r.calib.detect.coverage import PoseSpread, coverage_of, coverage_warnings
 from s2r.profile import StereoProfile
 from s2r.registry import load_profile
 from s2r.render import render_board_set

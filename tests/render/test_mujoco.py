@@ -112,7 +112,7 @@ def test_backend_boards_land_on_the_profile_projection(tmp_path: Path, renderer:
 
 @pytest.mark.parametrize("spec", [CHARUCO, APRILGRID], ids=["charuco", "aprilgrid"])
 def test_mujoco_renders_marker_targets_unmirrored(tmp_path: Path, spec: dict[str, object]) -> None:
-    from s2r.calib.markers import detect_target
+    from s2r.calib.detect.markers import detect_target
 
     rig = _rig(480, 360)
     target = target_from_mapping(spec)

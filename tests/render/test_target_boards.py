@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from s2r.calib.markers import detect_target
+from s2r.calib.detect.markers import detect_target
 from s2r.cli import main
 from s2r.render import render_board_set
 from s2r.render.distortion import project_points

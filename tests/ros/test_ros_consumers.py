@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 import pytest
 
-from s2r.calib.synth import write_stereo_set
+from s2r.calib.solve.synth import write_stereo_set
 from s2r.cli import main
 from s2r.depth.pipeline import StereoPipeline
 from s2r.formats.s2r_yaml import dump_profile, load_profile_file

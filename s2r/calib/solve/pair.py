@@ -1,13 +1,13 @@
 """Solve a stereo pair from matched chessboard views: checks, then one joint solve (default) or ROS's way.
 
-Default: each camera alone with OpenCV (:func:`s2r.calib.rig.initial_rig`), the checks of
-:mod:`s2r.calib.rig` (identical images, mismatched pairs, ``--square`` unit, swapped cameras), then
-:func:`s2r.calib.joint.solve_joint` refining both cameras, the extrinsics and every board pose together
+Default: each camera alone with OpenCV (:func:`s2r.calib.solve.rig.initial_rig`), the checks of
+:mod:`s2r.calib.solve.rig` (identical images, mismatched pairs, ``--square`` unit, swapped cameras), then
+:func:`s2r.calib.solve.joint.solve_joint` refining both cameras, the extrinsics and every board pose together
 with outliers rejected inside the loop; every standard deviation comes from that solve's covariance.
 
 ``fix_intrinsics`` (ROS camera_calibration's way): intrinsics from the mono solves, held fixed in
 ``cv2.stereoCalibrate``; the baseline std then adds the intrinsics' uncertainty propagated through the
-extrinsics (:func:`s2r.calib.solve.extrinsics_covariance`).
+extrinsics (:func:`s2r.calib.solve.cvsolve.extrinsics_covariance`).
 """
 
 from __future__ import annotations
@@ -20,14 +20,14 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.joint import JointSolution, solve_joint
-from s2r.calib.lens import LensModel, lens_model
-from s2r.calib.observations import StereoObservation, chessboard_observation
-from s2r.calib.rig import RigInit, check_rig, initial_rig, pair_consistency
-from s2r.calib.solve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
+from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
+from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
+from s2r.calib.solve.lens import LensModel, lens_model
+from s2r.calib.solve.observations import StereoObservation, chessboard_observation
+from s2r.calib.solve.rig import RigInit, check_rig, initial_rig, pair_consistency
 from s2r.errors import CalibrationError
 
-__all__ = ["PairSolution", "solve_pair"]
+__all__ = ["PairSolution", "solve_pair", "solve_pair_warped"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -40,7 +40,11 @@ class PairSolution:
     """The solved pair. ``keep`` indexes the input views used; ``per_view`` (len(keep), 3) RMS px (left,
     right, both); ``std_left/right`` (fx fy cx cy d0..dn, inf where unobservable, 0 for fixed terms);
     ``outliers`` (input index, left px, right px, both px, reason); ``mismatched`` (input index, reason);
-    ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera)."""
+    ``residuals`` per used view (left (N, 2), right (N, 2)) px; board poses ``rvecs``/``tvecs`` (left camera);
+    ``rms_all_px`` the RMS over every corner of the used views (rejected ones too) of ``corners_total``;
+    ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers;
+    ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only);
+    ``warp_m`` the board's bend (x, y; metres at the board centre) and its std when it was solved."""
 
     K1: FloatArray
     D1: FloatArray
@@ -65,6 +69,13 @@ class PairSolution:
     rvecs: tuple[FloatArray, ...]
     tvecs: tuple[FloatArray, ...]
     method: str
+    rms_all_px: float = float("nan")
+    corners_total: int = 0
+    rejected_corners: tuple[tuple[int, int, int], ...] = ()
+    cov_left: FloatArray | None = None
+    cov_right: FloatArray | None = None
+    warp_m: FloatArray | None = None
+    warp_std_m: FloatArray | None = None
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -105,9 +116,15 @@ def _camera_std(sol: JointSolution, side: str, lens: LensModel) -> FloatArray:
     return np.concatenate([std, dist])
 
 
-def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: LensModel,
-           max_error_px: float | None) -> PairSolution:
-    sol = solve_joint([obs[i] for i in keep], lens, init.joint_init(), max_view_error_px=max_error_px)
+def _intrinsics_cov(sol: JointSolution, side: str, lens: LensModel) -> FloatArray:
+    idx = [sol.names.index(f"{side} {n}") for n in ("fx", "fy", "cx", "cy", *(lens.coef_names[i] for i in lens.free))]
+    return np.asarray(sol.cov[np.ix_(idx, idx)], np.float64)
+
+
+def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointInit, lens: LensModel,
+           max_error_px: float | None, *, warp: bool = False) -> PairSolution:
+    start = init if isinstance(init, JointInit) else init.joint_init()
+    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp)
     u = sol.T / np.linalg.norm(sol.T)
     b_std = float(np.sqrt(max(0.0, float(u @ sol.translation_cov() @ u))))
     r_std = float(np.degrees(np.sqrt(max(0.0, float(np.trace(sol.rotation_cov()))))))
@@ -125,7 +142,13 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: L
                                                   if r is not None and m is not None]))))
     rms_r = float(np.sqrt(np.mean(np.concatenate([np.sum(r[m] ** 2, axis=1) for r, m in zip(rr, mr, strict=True)
                                                   if r is not None and m is not None]))))
+    every = [np.sum(r ** 2, axis=1) for j in used for r in sol.residuals[j] if r is not None]
+    groups = tuple((keep[j], *(0 if m is None else int(np.sum(~m)) for m in sol.inliers[j])) for j in used
+                   if any(m is not None and not m.all() for m in sol.inliers[j]))
     return PairSolution(
+        cov_left=_intrinsics_cov(sol, "left", lens), cov_right=_intrinsics_cov(sol, "right", lens),
+        rms_all_px=float(np.sqrt(np.mean(np.concatenate(every)))) if every else float("nan"),
+        corners_total=int(sum(len(e) for e in every)), rejected_corners=groups,  # type: ignore[arg-type]
         K1=sol.K1, D1=sol.D1, K2=sol.K2, D2=sol.D2, R=sol.R, T=sol.T, std_left=_camera_std(sol, "left", lens),
         std_right=_camera_std(sol, "right", lens), baseline_std_m=b_std, rotation_std_deg=r_std,
         rms_left_px=rms_l, rms_right_px=rms_r, rms_px=sol.rms_px, keep=tuple(keep[j] for j in used),
@@ -133,8 +156,11 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit, lens: L
         threshold_px=thr, outliers=outliers, mismatched=(), unobservable=sol.unobservable,
         residuals=tuple((r, q) for r, q in zip(rl, rr, strict=True)),  # type: ignore[misc]
         rvecs=tuple(sol.rvecs[j] for j in used), tvecs=tuple(sol.tvecs[j] for j in used),
+        warp_m=sol.warp.copy() if warp else None,
+        warp_std_m=np.array([sol.std("warp x"), sol.std("warp y")]) if warp else None,
         method="s2r calibrate: OpenCV calibrateCameraExtended per camera to initialise, then one joint "
-               f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics and board poses")
+               f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics, board poses"
+               + (" and the board's bend" if warp else ""))
 
 
 def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tuple[int, int], lens: LensModel,
@@ -175,9 +201,18 @@ def _fixed(obs: list[StereoObservation], keep: list[int], obj: Corners, size: tu
         unobservable=tuple(f"{side} parameter {i}" for side, m in (("left", ml), ("right", mr))
                            for i, s in enumerate(m.std) if not np.isfinite(s)),
         residuals=tuple((a.astype(np.float64), b.astype(np.float64)) for a, b in res),
-        rvecs=st.rvecs, tvecs=st.tvecs,
+        rvecs=st.rvecs, tvecs=st.tvecs, rms_all_px=st.rms_px, corners_total=2 * len(obj) * len(keep),
         method="s2r calibrate --fix-intrinsics: OpenCV calibrateCameraExtended per camera, stereoCalibrate "
                "with CALIB_FIX_INTRINSIC (as ROS camera_calibration)")
+
+
+def solve_pair_warped(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,
+                      base: PairSolution, *, distortion: str, max_error_px: float | None = None) -> PairSolution:
+    """The joint solve of ``base``'s views (``left[i]``/``right[i]``, the views ``base`` kept, in its order)
+    with the board's bend also solved, started from ``base``."""
+    obs = _observations(names, left, right, obj)
+    init = JointInit(base.K1, base.D1, base.K2, base.D2, base.R, base.T, base.rvecs, base.tvecs)
+    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True)
 
 
 def solve_pair(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,

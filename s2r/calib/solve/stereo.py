@@ -6,6 +6,7 @@ import logging
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -13,14 +14,25 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.lens import DEFAULT_LENS, lens_model
-from s2r.calib.models import ModelComparison, compare_models
-from s2r.calib.pair import PairSolution, solve_pair
-from s2r.calib.synth import board_object_points
-from s2r.calib.verdict import Verdict, stereo_verdict
-from s2r.calib.views import (
+from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
+from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
+from s2r.calib.solve.models import ModelComparison
+from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
+from s2r.calib.solve.projection import ProjectionMap
+from s2r.calib.solve.stereo_figures import (
+    board_text,
+    choose_warp,
+    dropped_warning,
+    merge_repeated_views,
+    projection_maps,
+    repeat_warning,
+    with_reported_std,
+)
+from s2r.calib.solve.synth import board_object_points
+from s2r.calib.solve.verdict import Verdict, stereo_verdict
+from s2r.calib.solve.views import (
     MIN_VIEWS,
     check_sizes,
     no_board_error,
@@ -44,7 +56,8 @@ from s2r.profile import (
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 
-__all__ = ["StereoCalibration", "ViewError", "calibrate_stereo", "calibrate_stereo_detections", "make_camera"]
+__all__ = ["StereoCalibration", "ViewError", "board_text", "calibrate_stereo", "calibrate_stereo_detections",
+           "make_camera"]
 
 log = logging.getLogger(__name__)
 Corners = NDArray[np.float32]
@@ -93,6 +106,10 @@ class StereoCalibration:
     models: ModelComparison | None = None
     verdict: Verdict | None = None
     view_paths: dict[str, tuple[Path, Path]] = field(default_factory=dict, repr=False)
+    heldout: StereoHeldout | None = None
+    board: str = ""
+    projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
+    board_warp: dict[str, Any] | None = None
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -118,7 +135,31 @@ class StereoCalibration:
             else self.solution.rotation_std_deg,
             "unobservable": [] if self.solution is None else list(self.solution.unobservable),
             "model_comparison": None if self.models is None else self.models.as_dict(),
+            "board": self.board,
+            "board_warp": self.board_warp,
+            "rms_all_px": None if self.solution is None else _nan_none(self.solution.rms_all_px),
+            "corners_total": None if self.solution is None else self.solution.corners_total,
+            "corners_rejected": None if self.solution is None else
+            sum(a + b for _, a, b in self.solution.rejected_corners),
+            "rejected_corner_groups": self.corner_groups(),
+            "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
+            "projection_uncertainty": {side: {src: None if m is None else m.as_dict() for src, m in maps.items()}
+                                       for side, maps in self.projection.items()},
         }
+
+
+    def corner_groups(self) -> list[dict[str, Any]]:
+        """Every used view that lost corners as outliers: its name, the count per camera and why."""
+        if self.solution is None:
+            return []
+        thr = "5 robust sigmas of the residuals (at least 0.3 px)"
+        return [{"name": self.used_names[self.solution.keep.index(i)] if i in self.solution.keep else str(i),
+                 "left": a, "right": b, "reason": f"corner residual beyond {thr}"}
+                for i, a, b in self.solution.rejected_corners]
+
+
+def _nan_none(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
 
 
 def _camera_figures(cam: Camera) -> dict[str, Any]:
@@ -185,9 +226,10 @@ def calibrate_stereo_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, pattern: tuple[int, int], square_m: float, name: str,
     distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
     swap: bool = False, sources: Sequence[SourceFile] = (), extra_dropped: Sequence[DroppedView] = (),
-    sample_paths: tuple[Path, Path] | None = None, compare: bool = True,
+    sample_paths: tuple[Path, Path] | None = None, compare: bool = True, jobs: int | None = None,
 ) -> StereoCalibration:
-    """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`."""
+    """Solve a stereo calibration from per-image detections (any input kind); see :func:`calibrate_stereo`
+    (``jobs``: processes of the resampling solves, default all cores)."""
     if swap:
         pairs = [(n, dr, dl) for n, dl, dr in pairs]
     size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
@@ -196,6 +238,8 @@ def calibrate_stereo_detections(
     if not any(d.status == "ok" for _, dl, dr in pairs for d in (dl, dr)):
         raise no_board_error(readable, pattern)
     dropped = [*extra_dropped, *views.dropped]
+    views, repeats = merge_repeated_views(views)
+    dropped += repeats
     if len(views.names) < MIN_VIEWS:
         raise too_few_error(len(views.names), dropped, pattern=pattern)
     obj = board_object_points(pattern, square_m)
@@ -208,6 +252,16 @@ def calibrate_stereo_detections(
                      fix_intrinsics=fix_intrinsics, square_m=square_m)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
+    names = [views.names[k] for k in keep]
+    warp_solve = None if fix_intrinsics else partial(solve_pair_warped, names, pl, pr, obj, sol,
+                                                      distortion=distortion, max_error_px=max_error_px)
+    held, models, held_w, warped = stereo_heldout(
+        names, pl, pr, obj, sol, lens=lens_model(distortion), compare=tuple(LENS_MODELS) if compare else (),
+        max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1, warp_solve=warp_solve)
+    sol, held, warp_figures = choose_warp(sol, held, warped, held_w)
+    keep = [selected[i] for i in sol.keep]
+    pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
+    sol = with_reported_std(sol, held)
     dropped += [DroppedView(name=views.names[selected[i]], reason=why) for i, why in sol.mismatched]
     outliers = [ViewError(views.names[selected[i]], a, b, c, used=False, reason=why)
                 for i, a, b, c, why in sol.outliers]
@@ -221,14 +275,13 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    models = compare_models(pl, pr, obj, size, chosen=distortion, guess=((sol.K1, sol.D1), (sol.K2, sol.D2))) \
-        if compare else None
-    warnings = [*([models.warning] if models is not None and models.warning else []),
+    warnings = [*repeat_warning(repeats), *dropped_warning(dropped),
+                *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
-    heldout = None if models is None else next(m.heldout_px for m in models.scores if m.chosen)
+    heldout = None if held is None else held.heldout_px
     verdict = stereo_verdict(
         rms_px=sol.rms_px, heldout_px=heldout, epipolar_px=float("nan") if epi is None else epi,
         baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
@@ -243,7 +296,18 @@ def calibrate_stereo_detections(
         used_names=tuple(views.names[k] for k in keep),
         corners_left=tuple(pl), corners_right=tuple(pr), reordered=views.reordered, sample_paths=sample_paths,
         detection_cached=sum(d.cached for _, dl, dr in pairs for d in (dl, dr)), solution=sol, models=models,
-        verdict=verdict)
+        verdict=verdict, heldout=held, board=board_text(pattern, square_m),
+        projection=projection_maps(sol, held, size, lens_model(distortion).free), board_warp=warp_figures)
+
+
+
+
+
+
+
+
+
+
 
 
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
@@ -299,11 +363,11 @@ def calibrate_stereo(
 
     Args:
         pattern: inner corners ``(cols, rows)``; square_m: square size in metres.
-        distortion: a :data:`s2r.calib.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
+        distortion: a :data:`s2r.calib.solve.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
         fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
         swap: exchange the left and right images (when the check finds the right camera to the left).
-        compare: score every lens model on held-out views (:func:`s2r.calib.models.compare_models`).
+        compare: score every lens model on held-out views (:func:`s2r.calib.solve.models.compare_models`).
         jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
         names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
 
@@ -329,7 +393,7 @@ def calibrate_stereo(
     report(progress, 0, 1, "solving")
     result = calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare)
+        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare, jobs=jobs)
     report(progress, 1, 1, "solving")
     first = result.used_names[0]
     idx = [n for n, _, _ in pairs].index(first)

@@ -6,7 +6,7 @@ Each figure gets a level from fixed limits (pixels unless stated):
 figure                        good <=   check <=   beyond: poor
 ============================  ========  =========  ==============================================
 stereo RMS reprojection       0.5       1.0
-held-out RMS (chosen model)   0.6       1.2        also "check" above 2x the fitted RMS
+held-out RMS (chosen model)   0.6       1.2        also "check" above 2x the fitted RMS (stereo: pairs held out)
 epipolar RMS (rectified)      0.5       1.0
 baseline std / baseline       0.5 %     2 %
 board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
@@ -63,7 +63,8 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
                    unobservable: Sequence[str] = (), mismatched: int = 0) -> Verdict:
     """Judge a stereo calibration from its figures (see the module table)."""
     reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"stereo RMS reprojection error {rms_px:.3f} px"),
-               *_heldout(heldout_px, rms_px)]
+               *_heldout(heldout_px, rms_px, "stereo: pairs left out of the fit, one board pose per pair fitted to "
+                                             "both cameras")]
     reasons.append(Reason(_grade(epipolar_px, 0.5, 1.0), f"epipolar RMS after rectification {epipolar_px:.3f} px"))
     if baseline_std_m is None:
         reasons.append(Reason("check", "baseline uncertainty unknown"))
@@ -93,13 +94,13 @@ def mono_verdict(*, rms_px: float, heldout_px: float | None, fx_px: float, fx_st
     return Verdict(level, tuple(reasons))
 
 
-def _heldout(heldout_px: float | None, rms_px: float) -> list[Reason]:
+def _heldout(heldout_px: float | None, rms_px: float, what: str = "views left out of the fit") -> list[Reason]:
     if heldout_px is None:
         return []
     level = _grade(heldout_px, 0.6, 1.2)
     if level == "good" and heldout_px > 2 * rms_px:
         level = "check"
-    return [Reason(level, f"held-out error {heldout_px:.3f} px (views left out of the fit)")]
+    return [Reason(level, f"held-out error {heldout_px:.3f} px ({what})")]
 
 
 def _common(coverage: Sequence[float], model_warning: str | None, unobservable: Sequence[str]) -> list[Reason]:

@@ -1,4 +1,5 @@
-"""Chessboard corner detection: downscaled detection, full-resolution refinement, parallel and cached.
+"""Corner detection of many images, parallel and cached (the detectors: :mod:`s2r.calib.detect.chessboard`,
+:mod:`s2r.calib.detect.markers`).
 
 Images up to twice 640x480 in area are detected at full resolution (as a plain OpenCV loop does);
 larger ones first on a copy downscaled by an integer factor (INTER_AREA, as ROS camera_calibration
@@ -21,7 +22,6 @@ import contextlib
 import hashlib
 import json
 import logging
-import math
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -33,7 +33,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib import cache
+from s2r.calib.detect import cache
+from s2r.calib.detect.chessboard import detect_board
+from s2r.calib.detect.markers import detect_target
 from s2r.errors import S2RError
 from s2r.executor import local_pool
 from s2r.fileio import atomic_write_text
@@ -48,22 +50,13 @@ __all__ = [
     "CornerCache",
     "DetectItem",
     "Detection",
-    "detect_board",
     "detect_stream",
-    "refine_window",
 ]
 
 log = logging.getLogger(__name__)
 
 #: Bumped whenever detection changes so stale cache entries are ignored.
-DETECTOR_VERSION = 6
-#: Images with more pixels than this are detected on a downscaled copy (as ROS does).
-DETECT_AREA_PX = 640 * 480
-_CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-#: Without EXHAUSTIVE: that flag finds a few more strongly tilted boards but costs about 0.2 s on every
-#: 640x360 image without a board (0.03-0.05 s without it), which dominates long recordings.
-_SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE
-_SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
+DETECTOR_VERSION = 7
 
 Status = Literal["ok", "no_board", "unreadable"]
 Corners = NDArray[np.float32]
@@ -74,8 +67,8 @@ class Detection:
     """Detection result of one image.
 
     ``size`` is ``(width, height)`` in pixels (None when unreadable); ``corners`` (N, 2) float32 pixels
-    when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"`` or ``"sb"``; ``detail`` says
-    why it failed. ``ids`` (N,) int32 are the target's corner ids of ``corners`` when a file-described
+    when ``status == "ok"``; ``detector`` is ``"classic"``, ``"classic-full"``, ``"sb"`` or ``"classic-plain"``;
+    ``detail`` says why it failed. ``ids`` (N,) int32 are the target's corner ids of ``corners`` when a file-described
     target (``--target``) was detected; None for a ``--pattern`` chessboard (all corners, row-major).
     """
 
@@ -100,81 +93,6 @@ class DetectItem:
     source: Path | NDArray[np.uint8]
 
 
-def refine_window(corners: Corners, pattern: tuple[int, int]) -> int:
-    """cornerSubPix half-window (pixels): 0.4 x the smallest neighbour distance in the grid, clamped 2..11.
-
-    The window (``2 * half + 1`` px) then spans 80 % of the smallest corner spacing: it never reaches the
-    neighbouring corners nor, for the outer corners, far past the outer squares into the background
-    (half the spacing let the board's edge pull corners of OpenCV's left02.jpg by 1-3 px)."""
-    cols, rows = pattern
-    grid = corners.reshape(rows, cols, 2).astype(np.float64)
-    dists = [np.linalg.norm(np.diff(grid, axis=1), axis=2), np.linalg.norm(np.diff(grid, axis=0), axis=2)]
-    min_dist = min(float(d.min()) for d in dists if d.size)
-    return int(min(11, max(2, math.floor(0.4 * min_dist))))
-
-
-def _classic(image: NDArray[np.uint8], pattern: tuple[int, int]) -> Corners | None:
-    ok, corners = cv2.findChessboardCorners(image, pattern, flags=_CLASSIC_FLAGS)
-    return np.asarray(corners, np.float32).reshape(-1, 2) if ok else None
-
-
-def _sector_based(image: NDArray[np.uint8], pattern: tuple[int, int]) -> Corners | None:
-    ok, corners = cv2.findChessboardCornersSB(image, pattern, flags=_SB_FLAGS)
-    return np.asarray(corners, np.float32).reshape(-1, 2) if ok else None
-
-
-def _board_likely(image: NDArray[np.uint8], pattern: tuple[int, int]) -> bool:
-    """OpenCV's quick chessboard check (what FAST_CHECK runs): False means surely no board (a few ms)."""
-    return bool(cv2.checkChessboard(image, pattern))
-
-
-def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
-    """Unrefined corners in full-resolution pixels, trying cheap detectors first.
-
-    Up to twice the detection area (e.g. 1280x720): the classic detector at full resolution, as a plain
-    OpenCV loop does (on the downscaled copy it is about 4x cheaper but can take seconds on a steeply
-    tilted board it then fails to find). Larger images: classic on a copy downscaled by an integer factor
-    (INTER_AREA), then classic at full resolution (boards whose squares shrink to a few pixels). Then the
-    sector-based detector on the (downscaled) image; for images larger than 640x480 only when OpenCV's quick
-    check (``checkChessboard``) says a board is likely, which keeps it (tens of ms) off frames without a
-    board. The check misses some boards only the sector-based detector finds (on the 640x480 test set 3 of
-    4), so small images, which are cheap, always get the fallback.
-    """
-    h, w = gray.shape[:2]
-    factor = math.ceil(math.sqrt(w * h / DETECT_AREA_PX) - 1e-9)
-    small = gray
-    if factor > 1:
-        small_size = (max(1, w // factor), max(1, h // factor))
-        small = np.asarray(cv2.resize(gray[:small_size[1] * factor, :small_size[0] * factor], small_size,
-                                      interpolation=cv2.INTER_AREA), np.uint8)
-    if factor > 2:
-        found = _classic(small, pattern)
-        if found is not None:
-            return ((found + 0.5) * factor - 0.5).astype(np.float32), "classic"
-    found = _classic(gray, pattern)
-    if found is not None:
-        return found, "classic" if factor <= 2 else "classic-full"
-    if factor > 1 and not _board_likely(small, pattern):
-        return None, ""
-    found = _sector_based(small, pattern)
-    if found is not None:
-        return ((found + 0.5) * factor - 0.5).astype(np.float32) if factor > 1 else found, "sb"
-    return None, ""
-
-
-def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
-    """Find and refine the inner corners of a ``(cols, rows)`` chessboard in an 8-bit grey image (H, W).
-
-    Returns ``(corners (N, 2) float32 pixels or None, detector name)``; refinement is at full resolution.
-    """
-    found, detector = _find(gray, pattern)
-    if found is None:
-        return None, ""
-    win = refine_window(found, pattern)
-    refined = cv2.cornerSubPix(gray, found.reshape(-1, 1, 2).copy(), (win, win), (-1, -1), _SUBPIX_CRITERIA)
-    return np.asarray(refined, np.float32).reshape(-1, 2), detector
-
-
 def _detect_item(item: DetectItem, pattern: tuple[int, int], target: AnyTarget | None = None) -> Detection:
     """Worker: read (if a path), detect (``target`` when given, else the ``pattern`` chessboard), describe."""
     if isinstance(item.source, Path):
@@ -185,8 +103,6 @@ def _detect_item(item: DetectItem, pattern: tuple[int, int], target: AnyTarget |
         gray = item.source
     size = (int(gray.shape[1]), int(gray.shape[0]))
     if target is not None:
-        from s2r.calib.markers import detect_target  # markers builds on detect_board
-
         found, name = detect_target(np.ascontiguousarray(gray, np.uint8), target)
         if found is None:
             return Detection(item.name, item.sha256, "no_board", size=size, detector=name,
@@ -228,7 +144,7 @@ class CornerCache:
 
     def get(self, name: str, sha256: str, pattern: tuple[int, int]) -> Detection | None:
         """The cached detection of this content, renamed to ``name``, or None (also for an entry that is not a
-        regular file or fails validation: see :mod:`s2r.calib.cache`)."""
+        regular file or fails validation: see :mod:`s2r.calib.detect.cache`)."""
         path = self._file(sha256, pattern)
         data = cache.read_entry(self.folder, path.name) if self.usable else None
         if data is None:

@@ -18,10 +18,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.coverage import FOOTPRINT_CELL_PX, Coverage
+from s2r.calib.detect.coverage import FOOTPRINT_CELL_PX, Coverage
+from s2r.calib.solve.projection import ProjectionMap
 from s2r.htmlreport import figure_to_data_uri, image_to_data_uri
 
-__all__ = ["board_poses_3d", "coverage_maps", "residual_vectors", "thumbnail_strip"]
+__all__ = ["board_poses_3d", "coverage_maps", "projection_uncertainty", "residual_vectors", "thumbnail_strip"]
 
 FloatArray = NDArray[np.float64]
 _THUMB_W = 192
@@ -44,6 +45,31 @@ def coverage_maps(coverages: Mapping[str, Coverage], size: tuple[int, int]) -> s
         ax.set_xlabel("x (px)")
         ax.set_ylabel("y (px)")
         fig.colorbar(im, ax=ax, label="views covering" if cov.footprint is not None else "corners")
+    return figure_to_data_uri(fig)
+
+
+def projection_uncertainty(maps: Mapping[str, Mapping[str, ProjectionMap | None]], size: tuple[int, int]) -> str:
+    """Per camera: the projection uncertainty (px, the larger of the covariance and jackknife maps) over the
+    image at the maps' distance, with contours."""
+    w, h = size
+    fig, axes = plt.subplots(1, len(maps), figsize=(4.8 * len(maps), 3.6), squeeze=False)
+    for ax, (label, pair) in zip(axes[0], maps.items(), strict=True):
+        known = [m for m in pair.values() if m is not None]
+        if not known:
+            ax.set_axis_off()
+            continue
+        sigma = np.max([m.sigma for m in known], axis=0)
+        first = known[0]
+        im = ax.imshow(sigma, cmap="magma", extent=(0, w, h, 0), interpolation="bilinear")
+        levels = [v for v in (0.05, 0.1, 0.2, 0.5, 1.0, 2.0) if float(sigma.min()) < v < float(sigma.max())]
+        if levels:
+            cs = ax.contour(first.xs, first.ys, sigma, levels=levels, colors="white", linewidths=0.7)
+            ax.clabel(cs, fontsize=7, fmt="%g")
+        ax.set_title(f"{label}: projection std at {first.distance_m:g} m, centre "
+                     f"{max(m.centre_px for m in known):.2f} px", fontsize=9)
+        ax.set_xlabel("x (px)")
+        ax.set_ylabel("y (px)")
+        fig.colorbar(im, ax=ax, label="px (worst direction)")
     return figure_to_data_uri(fig)
 
 

@@ -20,34 +20,21 @@ not constrain (relative eigenvalue below 1e-12 after column scaling) make the pa
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.lens import LensModel
-from s2r.calib.observations import BoardObservation, StereoObservation
+from s2r.calib.solve.jointterms import Blocks, JointInit, Masks, State, all_residuals, normal_equations, prepare
+from s2r.calib.solve.lens import LensModel
+from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError
 
 __all__ = ["JointInit", "JointSolution", "solve_joint"]
 
 FloatArray = NDArray[np.float64]
 _MIN_VIEWS = 5
-
-
-@dataclass(frozen=True)
-class JointInit:
-    """Starting point: K (3x3) and D (n_coef) per camera, R (3x3), T (3,) m, a board pose per view."""
-
-    K1: FloatArray
-    D1: FloatArray
-    K2: FloatArray
-    D2: FloatArray
-    R: FloatArray
-    T: FloatArray
-    rvecs: Sequence[FloatArray]
-    tvecs: Sequence[FloatArray]
 
 
 @dataclass(frozen=True)
@@ -81,6 +68,7 @@ class JointSolution:
     residuals: tuple[tuple[FloatArray | None, FloatArray | None], ...]
     corners_dropped: int
     view_threshold_px: float
+    warp: FloatArray = field(default_factory=lambda: np.zeros(2))
 
     def std(self, name: str) -> float:
         """Standard deviation of a global parameter (inf when unobservable)."""
@@ -95,126 +83,34 @@ class JointSolution:
         return np.asarray(self.cov[-6:-3, -6:-3], np.float64)
 
 
-class _State:
-    """Mutable parameters of the solve."""
-
-    def __init__(self, lens: LensModel, init: JointInit) -> None:
-        self.lens = lens
-        self.K = [np.asarray(init.K1, np.float64).copy(), np.asarray(init.K2, np.float64).copy()]
-        self.D = [np.zeros(lens.n_coef), np.zeros(lens.n_coef)]
-        for d, src in zip(self.D, (init.D1, init.D2), strict=True):
-            src = np.asarray(src, np.float64).reshape(-1)[:lens.n_coef]
-            d[list(lens.free)] = src[list(lens.free)]
-        self.r_lr = np.asarray(cv2.Rodrigues(np.asarray(init.R, np.float64))[0], np.float64).reshape(3)
-        self.t_lr = np.asarray(init.T, np.float64).reshape(3).copy()
-        self.rv = [np.asarray(r, np.float64).reshape(3).copy() for r in init.rvecs]
-        self.tv = [np.asarray(t, np.float64).reshape(3).copy() for t in init.tvecs]
-
-    @property
-    def n_intr(self) -> int:
-        return 4 + len(self.lens.free)
-
-    def global_vec(self) -> FloatArray:
-        parts = []
-        for K, D in zip(self.K, self.D, strict=True):
-            parts += [[K[0, 0], K[1, 1], K[0, 2], K[1, 2]], D[list(self.lens.free)]]
-        return np.concatenate([*map(np.asarray, parts), self.r_lr, self.t_lr])
-
-    def set_global(self, g: FloatArray) -> None:
-        ni = self.n_intr
-        for c in range(2):
-            v = g[c * ni:(c + 1) * ni]
-            self.K[c] = np.array([[v[0], 0, v[2]], [0, v[1], v[3]], [0, 0, 1.0]])
-            self.D[c][list(self.lens.free)] = v[4:]
-        self.r_lr, self.t_lr = g[2 * ni:2 * ni + 3].copy(), g[2 * ni + 3:].copy()
-
-    def copy_views(self) -> tuple[list[FloatArray], list[FloatArray]]:
-        return [r.copy() for r in self.rv], [t.copy() for t in self.tv]
-
-
-def _camera_terms(state: _State, cam: int, obs: BoardObservation, mask: NDArray[np.bool_], k: int
-                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Residuals (2n,), global Jacobian (2n, ng) and view Jacobian (2n, 6) of one camera's inlier corners."""
-    ni = state.n_intr
-    ng = 2 * ni + 6
-    proj = state.lens.projection
-    obj, img = obs.obj[mask], obs.img[mask]
-    cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
-    Jg = np.zeros((2 * len(obj), ng))
-    if cam == 0:
-        pts, jac = proj.project(obj, state.rv[k], state.tv[k], state.K[0], state.D[0])
-        Jg[:, :ni] = jac[:, cols]
-        Jv = jac[:, :6]
-    else:
-        r3, t3, dr3dr1, _, dr3dr2, _, dt3dr1, dt3dt1, dt3dr2, dt3dt2 = cv2.composeRT(
-            state.rv[k].reshape(3, 1), state.tv[k].reshape(3, 1), state.r_lr.reshape(3, 1), state.t_lr.reshape(3, 1))
-        pts, jac = proj.project(obj, np.asarray(r3, np.float64).reshape(3), np.asarray(t3, np.float64).reshape(3),
-                                state.K[1], state.D[1])
-        jr, jt = jac[:, 0:3], jac[:, 3:6]
-        Jg[:, ni:2 * ni] = jac[:, cols]
-        Jg[:, 2 * ni:2 * ni + 3] = jr @ dr3dr2 + jt @ dt3dr2
-        Jg[:, 2 * ni + 3:] = jt @ dt3dt2
-        Jv = np.hstack([jr @ dr3dr1 + jt @ dt3dr1, jt @ dt3dt1])
-    return (pts - img).reshape(-1), Jg, Jv
-
-
-_Masks = list[list[NDArray[np.bool_] | None]]
-
-
-def _normal_equations(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int]
-                      ) -> tuple[float, int, FloatArray, FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
-    """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v)."""
-    ng = 2 * state.n_intr + 6
-    A, b = np.zeros((ng, ng)), np.zeros(ng)
-    blocks = []
-    ssr, m = 0.0, 0
-    for k in active:
-        Agv, Avv, bv = np.zeros((ng, 6)), np.zeros((6, 6)), np.zeros(6)
-        for cam, obs in enumerate((views[k].left, views[k].right)):
-            mask = masks[k][cam]
-            if obs is None or mask is None or not mask.any():
-                continue
-            r, Jg, Jv = _camera_terms(state, cam, obs, mask, k)
-            ssr += float(r @ r)
-            m += r.size
-            A += Jg.T @ Jg
-            b += Jg.T @ r
-            Agv += Jg.T @ Jv
-            Avv += Jv.T @ Jv
-            bv += Jv.T @ r
-        blocks.append((Agv, Avv, bv))
-    return ssr, m, A, b, blocks
-
-
-def _step(A: FloatArray, b: FloatArray, blocks: list[tuple[FloatArray, FloatArray, FloatArray]], lam: float
-          ) -> tuple[FloatArray, list[FloatArray]]:
-    """Damped Gauss-Newton step (global, per view) with the view blocks eliminated."""
+def _step(A: FloatArray, b: FloatArray, blocks: Blocks, lam: float) -> tuple[FloatArray, FloatArray]:
+    """Damped Gauss-Newton step (global (ng,), per view (n, 6)) with the view blocks eliminated."""
+    Agv, Avv, bv = blocks
     S = A + lam * np.diag(np.diag(A))
-    rhs = -b.copy()
-    inv = []
-    for Agv, Avv, bv in blocks:
-        Vi = np.linalg.inv(Avv + lam * np.diag(np.diag(Avv)) + 1e-12 * np.eye(6))
-        inv.append(Vi)
-        S -= Agv @ Vi @ Agv.T
-        rhs += Agv @ Vi @ bv
+    damp = lam * np.einsum("nii->ni", Avv)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
+    Vi = np.linalg.inv(Avv + damp)
+    AV = np.einsum("nij,njk->nik", Agv, Vi)
+    S -= np.einsum("nik,njk->ij", AV, Agv)
+    rhs = -b + np.einsum("nij,nj->i", AV, bv)
     dg = np.asarray(np.linalg.lstsq(S, rhs, rcond=None)[0], np.float64)
-    dv = [Vi @ (-bv - Agv.T @ dg) for Vi, (Agv, _, bv) in zip(inv, blocks, strict=True)]
+    dv = np.einsum("nij,nj->ni", Vi, -bv - np.einsum("nij,i->nj", Agv, dg))
     return dg, dv
 
 
-def _levenberg_marquardt(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int],
-                         iterations: int = 50) -> None:
+def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
+                         iterations: int = 50, rel_tol: float = 1e-10) -> None:
     lam = 1e-3
-    ssr, _, A, b, blocks = _normal_equations(state, views, masks, active)
+    data = prepare(views, masks, active)
+    ssr, _, A, b, blocks = normal_equations(state, views, masks, active, data)
     for _ in range(iterations):
         g0, (rv0, tv0) = state.global_vec(), state.copy_views()
         dg, dv = _step(A, b, blocks, lam)
         state.set_global(g0 + dg)
         for k, d in zip(active, dv, strict=True):
             state.rv[k], state.tv[k] = rv0[k] + d[:3], tv0[k] + d[3:]
-        new = _normal_equations(state, views, masks, active)
+        new = normal_equations(state, views, masks, active, data)
         if np.isfinite(new[0]) and new[0] <= ssr:
-            converged = ssr - new[0] < 1e-10 * max(ssr, 1e-12)
+            converged = ssr - new[0] < rel_tol * max(ssr, 1e-12)
             ssr, _, A, b, blocks = new
             lam = max(lam / 10, 1e-9)
             if converged:
@@ -227,31 +123,19 @@ def _levenberg_marquardt(state: _State, views: Sequence[StereoObservation], mask
                 return
 
 
-def _residuals(state: _State, views: Sequence[StereoObservation], k: int
-               ) -> tuple[FloatArray | None, FloatArray | None]:
-    out: list[FloatArray | None] = []
-    for cam, obs in enumerate((views[k].left, views[k].right)):
-        if obs is None:
-            out.append(None)
-            continue
-        r, _, _ = _camera_terms(state, cam, obs, np.ones(len(obs.ids), bool), k)
-        out.append(r.reshape(-1, 2))
-    return out[0], out[1]
-
-
 def _robust_threshold(values: FloatArray, k_mad: float = 5.0, k_median: float = 2.0, floor: float = 0.3) -> float:
     med = float(np.median(values))
     return max(med + k_mad * 1.4826 * float(np.median(np.abs(values - med))), k_median * med, floor)
 
 
-def _reject(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int], *,
+def _reject(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int], *,
             view_thr: float | None, corner_k: float, corner_floor_px: float,
             max_view_error_px: float | None) -> tuple[bool, float]:
     """Drop outlier corners and views (in place); returns (anything changed?, the view RMS threshold px).
 
     A view's RMS is over the inlier corners of both cameras; the threshold is ``max_view_error_px`` or a
     robust one (median + 5 MAD-sigmas, at least 2x the median and 0.3 px) fixed at the first round."""
-    res = {k: _residuals(state, views, k) for k in active}
+    res = all_residuals(state, views, active)
     comps = np.concatenate([np.abs(r[masks[k][c]]).reshape(-1) for k in active for c, r in enumerate(res[k])
                             if r is not None and masks[k][c] is not None])
     sigma = float(np.median(comps)) / 0.6745 if comps.size else 0.0  # median |x| = 0.6745 sigma
@@ -281,12 +165,11 @@ def _reject(state: _State, views: Sequence[StereoObservation], masks: _Masks, ac
     return changed, view_thr
 
 
-def _covariance(state: _State, views: Sequence[StereoObservation], masks: _Masks, active: list[int],
+def _covariance(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
                 names: list[str]) -> tuple[FloatArray, tuple[str, ...], float]:
-    ssr, m, A, _, blocks = _normal_equations(state, views, masks, active)
-    S = A.copy()
-    for Agv, Avv, _ in blocks:
-        S -= Agv @ np.linalg.pinv(Avv) @ Agv.T
+    ssr, m, A, _, blocks = normal_equations(state, views, masks, active)
+    Agv, Avv, _ = blocks
+    S = A - np.einsum("nij,njk,nlk->il", Agv, np.linalg.pinv(Avv), Agv)
     p = len(names) + 6 * len(active)
     sigma2 = ssr / max(1, m - p)
     scale = 1.0 / np.sqrt(np.maximum(np.diag(S), 1e-300))
@@ -305,16 +188,22 @@ def _covariance(state: _State, views: Sequence[StereoObservation], masks: _Masks
     return cov, tuple(n for n, b in zip(names, bad, strict=True) if b), float(np.sqrt(sigma2))
 
 
-def _names(lens: LensModel) -> list[str]:
+def _names(lens: LensModel, warp: bool = False) -> list[str]:
     intr = ["fx", "fy", "cx", "cy", *(lens.coef_names[i] for i in lens.free)]
-    return [f"{side} {n}" for side in ("left", "right") for n in intr] + ["rx", "ry", "rz", "tx", "ty", "tz"]
+    return [f"{side} {n}" for side in ("left", "right") for n in intr] + (["warp x", "warp y"] if warp else []) \
+        + ["rx", "ry", "rz", "tx", "ty", "tz"]
 
 
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
-                max_view_error_px: float | None = None) -> JointSolution:
+                max_view_error_px: float | None = None, rel_tol: float = 1e-10,
+                covariance: bool = True, warp: bool = False) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
+    ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
+    from the full solution, use a looser one); ``covariance`` False skips the covariance (NaN; they need
+    none); ``warp`` also solves the board's bend (two parameters, metres, see ``State.warp_basis``; the
+    initial one from ``init.warp``).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -322,29 +211,33 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     if len(views) < _MIN_VIEWS:
         raise CalibrationError(f"only {len(views)} views for the joint solve, at least {_MIN_VIEWS} needed",
                                hint="record more views with the board visible in both cameras")
-    state = _State(lens, init)
-    masks: _Masks = [[None if o is None else np.ones(len(o.ids), bool) for o in (v.left, v.right)] for v in views]
+    state = State(lens, init, warp=warp, views=views)
+    masks: Masks = [[None if o is None else np.ones(len(o.ids), bool) for o in (v.left, v.right)] for v in views]
     active = list(range(len(views)))
     view_thr: float | None = None
     for _ in range(max_rounds):
-        _levenberg_marquardt(state, views, masks, active)
+        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
         changed, view_thr = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
                                     corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
         if not changed:
             break
     else:
-        _levenberg_marquardt(state, views, masks, active)
+        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
     if not np.all(np.isfinite(state.global_vec())):
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")
-    names = _names(lens)
-    cov, unobservable, sigma = _covariance(state, views, masks, active, names)
+    names = _names(lens, warp)
+    if covariance:
+        cov, unobservable, sigma = _covariance(state, views, masks, active, names)
+    else:
+        cov, unobservable, sigma = np.full((len(names), len(names)), np.nan), (), float("nan")
     per_view = np.full((len(views), 2), np.nan)
     residuals = []
     sq, n = 0.0, 0
     dropped = 0
+    every = all_residuals(state, views, list(range(len(views))))
     for k in range(len(views)):
-        res = _residuals(state, views, k)
+        res = every[k]
         residuals.append(res)
         for c, r in enumerate(res):
             mask = masks[k][c]
@@ -362,4 +255,5 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
         sigma_px=sigma, rms_px=float(np.sqrt(sq / max(1, n))), per_view_px=per_view,
         used=tuple(k in active for k in range(len(views))),
         inliers=tuple((m[0], m[1]) for m in masks), residuals=tuple((r[0], r[1]) for r in residuals),
-        corners_dropped=dropped, view_threshold_px=float(view_thr) if view_thr is not None else float("nan"))
+        corners_dropped=dropped, view_threshold_px=float(view_thr) if view_thr is not None else float("nan"),
+        warp=state.warp.copy())

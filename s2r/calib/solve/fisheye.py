@@ -7,7 +7,7 @@
   partial views (REFERENCE.md). The pair is solved here instead with both cameras' intrinsics fixed (as the
   pinhole path does with CALIB_FIX_INTRINSIC): scipy's Levenberg-Marquardt-type ``least_squares`` over the
   right camera's pose and one board pose per view, residuals from ``cv2.fisheye.projectPoints`` in pixels.
-- Baseline uncertainty: first-order, two-step as :func:`s2r.calib.solve.baseline_covariance`:
+- Baseline uncertainty: first-order, two-step as :func:`s2r.calib.solve.cvsolve.baseline_covariance`:
   ``cov_E = sigma^2 A_EE^-1 + S cov_K S^T``.
 
 Points: ``obj`` board corners (N, 3) float32 metres per view; image corners (N, 2) float32 pixels.
@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from s2r.calib.lens import LensModel
-from s2r.calib.solve import MonoSolution, StereoSolution
+from s2r.calib.solve.cvsolve import MonoSolution, StereoSolution
+from s2r.calib.solve.lens import LensModel
 from s2r.errors import CalibrationError
 
 __all__ = ["FISHEYE", "EquidistantProjection", "FisheyeMono", "fisheye_baseline_covariance", "solve_mono_fisheye",
@@ -245,7 +245,7 @@ def _params_of(K: FloatArray, D: FloatArray) -> FloatArray:
 @dataclass(frozen=True)
 class EquidistantProjection:
     """OpenCV's fisheye (equidistant, k1..k4) camera through ``cv2.fisheye.projectPoints``, with the Jacobian
-    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); see :mod:`s2r.calib.lens`."""
+    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); see :mod:`s2r.calib.solve.lens`."""
 
     name: str = "equidistant"
 
@@ -260,6 +260,6 @@ class EquidistantProjection:
 
 #: cv2.fisheye.projectPoints' Jacobian columns (f 2, c 2, k 4, rvec 3, tvec 3, alpha) in the joint order.
 _JOINT_COLUMNS = (8, 9, 10, 11, 12, 13, 0, 1, 2, 3, 4, 5, 6, 7)
-#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.joint.solve_joint` (all four k free).
+#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.solve.joint.solve_joint` (all four k free).
 FISHEYE = LensModel("equidistant", EquidistantProjection(), 4, (0, 1, 2, 3), 0, "equidistant",
                     ("k1", "k2", "k3", "k4"))

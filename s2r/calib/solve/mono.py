@@ -12,15 +12,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
-from s2r.calib.lens import DEFAULT_LENS
-from s2r.calib.models import ModelComparison, compare_models
-from s2r.calib.solve import MonoSolution, outlier_threshold, solve_mono
-from s2r.calib.stereo import make_camera
-from s2r.calib.synth import board_object_points
-from s2r.calib.verdict import Verdict, mono_verdict
-from s2r.calib.views import MIN_VIEWS, check_sizes, no_board_error, select_diverse, too_few_error
+from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
+from s2r.calib.solve.lens import DEFAULT_LENS
+from s2r.calib.solve.models import ModelComparison, compare_models
+from s2r.calib.solve.stereo import make_camera
+from s2r.calib.solve.synth import board_object_points
+from s2r.calib.solve.verdict import Verdict, mono_verdict
+from s2r.calib.solve.views import MIN_VIEWS, check_sizes, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import CalibrationQuality, DroppedView, MonoProfile, Provenance, SourceFile
 from s2r.progress import ProgressCallback

@@ -1,7 +1,7 @@
 """Stereo and mono calibration with corner ids: ``--target TARGET.yaml`` and ``--lens fisheye``.
 
 The same inputs, cache, outlier rule, standard deviations, coverage warnings and result types as the
-chessboard path (:mod:`s2r.calib.stereo`, :mod:`s2r.calib.mono`), on views that may be partial: each camera is
+chessboard path (:mod:`.stereo`, :mod:`.mono`), on views that may be partial: each camera is
 solved on every view it saw, the pair on the corners both cameras saw (matched by id). A ``--pattern``
 chessboard through a fisheye lens comes here as a Kalibr checkerboard target.
 """
@@ -17,16 +17,16 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from s2r.calib.coverage import coverage_of, coverage_warnings
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.lens import DEFAULT_LENS
-from s2r.calib.mono import MonoCalibration
-from s2r.calib.observations import StereoObservation
-from s2r.calib.pair import PairSolution
-from s2r.calib.solve import StereoSolution, outlier_threshold
-from s2r.calib.stereo import StereoCalibration, ViewError, _uncertainty_warnings
-from s2r.calib.target_joint import joint_solve, lens_model_of
-from s2r.calib.targetcal import (
+from s2r.calib.detect.coverage import coverage_of, coverage_warnings
+from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
+from s2r.calib.solve.lens import DEFAULT_LENS
+from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.observations import StereoObservation
+from s2r.calib.solve.pair import PairSolution
+from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
+from s2r.calib.solve.target_joint import joint_solve, lens_model_of
+from s2r.calib.solve.targetcal import (
     CameraViews,
     MonoFit,
     Observation,
@@ -42,8 +42,8 @@ from s2r.calib.targetcal import (
     solve_pair,
     to_camera,
 )
-from s2r.calib.verdict import stereo_verdict
-from s2r.calib.views import MIN_VIEWS, check_sizes, too_few_error
+from s2r.calib.solve.verdict import stereo_verdict
+from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
 from s2r.progress import ProgressCallback, report
@@ -228,7 +228,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         used_names=tuple(joint_obs[i].name for i in sol.keep),
         corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
         corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
-        reordered=tuple(reordered), solution=aligned, verdict=verdict)
+        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe())
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
@@ -271,7 +271,7 @@ def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int
         threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
         epipolar_rms_px=epi, warnings=tuple(warnings), used_names=tuple(v.name for v in views),
         corners_left=tuple(v.left for v in views), corners_right=tuple(v.right for v in views),
-        reordered=tuple(reordered))
+        reordered=tuple(reordered), board=target.describe())
 
 
 def _unobservable(names: Sequence[str]) -> list[str]:

@@ -5,7 +5,7 @@ board frame in the camera's optical frame) and the intrinsics ``K`` (3x3 px) and
 to pixels, with the Jacobian in one fixed column order: ``rvec (3), tvec (3), fx, fy, cx, cy, D[0..n)``.
 :data:`PINHOLE` is OpenCV's pinhole model (``cv2.projectPoints``: plumb_bob and rational distortion);
 other models (e.g. an equidistant fisheye through ``cv2.fisheye.projectPoints``) implement the same
-protocol and plug into :mod:`s2r.calib.joint` unchanged.
+protocol and plug into :mod:`s2r.calib.solve.joint` unchanged.
 
 :data:`LENS_MODELS` maps each ``--distortion`` choice to its projection, its coefficient count (all
 stored, fixed ones at 0) and the indices of the coefficients the solve estimates:

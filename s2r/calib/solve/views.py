@@ -19,9 +19,11 @@ from s2r.profile import DroppedView
 __all__ = [
     "MAX_SOLVE_VIEWS",
     "MIN_VIEWS",
+    "REPEAT_PX",
     "StereoViews",
     "check_sizes",
     "match_corner_order",
+    "merge_repeats",
     "no_board_error",
     "select_diverse",
     "stereo_views",
@@ -118,6 +120,12 @@ def stereo_views(pairs: Sequence[tuple[str, Detection, Detection]], pattern: tup
     dropped: list[DroppedView] = []
     for name, dl, dr in pairs:
         bad = [d for d in (dl, dr) if d.status != "ok"]
+        if len(bad) == 1:
+            other = dr if bad[0] is dl else dl
+            why = _skip_reason(bad[0])
+            dropped.append(why.model_copy(update={"reason": f"{why.reason}; its partner {other.name} shows the "
+                                                            "board, so the pair is dropped"}))
+            continue
         if bad:
             dropped.extend(_skip_reason(d) for d in bad)
             continue
@@ -129,6 +137,37 @@ def stereo_views(pairs: Sequence[tuple[str, Detection, Detection]], pattern: tup
         left.append(dl.corners)
         right.append(fixed)
     return StereoViews(tuple(names), tuple(left), tuple(right), tuple(reordered), tuple(dropped))
+
+
+#: Views whose corners all lie within this RMS distance (px, in both cameras) of an earlier view's are repeats
+#: (a board held still while recording): merged into that view, so the std counts each board pose once.
+REPEAT_PX = 0.1
+
+
+def merge_repeats(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], *,
+                  tol_px: float = REPEAT_PX) -> tuple[list[int], list[DroppedView]]:
+    """Indices of the views to keep (the first of each group of near-identical views) and a DroppedView per
+    repeat naming the view it repeats and the corner RMS difference (px)."""
+    keep: list[int] = []
+    repeats: list[DroppedView] = []
+    if not len(names):
+        return keep, repeats
+    flat_l = np.asarray([np.asarray(c, np.float64).reshape(-1) for c in left])
+    flat_r = np.asarray([np.asarray(c, np.float64).reshape(-1) for c in right])
+    n_corners = flat_l.shape[1] // 2
+    for i in range(len(names)):
+        if keep:
+            dl = np.sqrt(np.sum((flat_l[keep] - flat_l[i]) ** 2, axis=1) / n_corners)
+            dr = np.sqrt(np.sum((flat_r[keep] - flat_r[i]) ** 2, axis=1) / n_corners)
+            worst = np.maximum(dl, dr)
+            j = int(np.argmin(worst))
+            if worst[j] < tol_px:
+                repeats.append(DroppedView(name=names[i], rms_px=float(worst[j]), reason=(
+                    f"repeat of {names[keep[j]]}: every corner within {worst[j]:.3f} px RMS (a still board); merged "
+                    "into it so the std counts that board pose once")))
+                continue
+        keep.append(i)
+    return keep, repeats
 
 
 def no_board_error(n_images: int, pattern: tuple[int, int]) -> CalibrationError:

@@ -20,10 +20,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.mono import MonoCalibration
-from s2r.calib.report_plots import board_poses_3d, coverage_maps, residual_vectors, thumbnail_strip
-from s2r.calib.stereo import StereoCalibration
-from s2r.calib.synth import board_object_points
+from s2r.calib.report.plots import (
+    board_poses_3d,
+    coverage_maps,
+    projection_uncertainty,
+    residual_vectors,
+    thumbnail_strip,
+)
+from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.stereo import StereoCalibration
+from s2r.calib.solve.synth import board_object_points
 from s2r.fileio import OutputBatch
 from s2r.htmlreport import (
     ReportSection,
@@ -158,16 +164,56 @@ def _models_table(result: StereoCalibration | MonoCalibration) -> str:
         return html_fragment("<p class='note'>model comparison not computed</p>")
     rows = [[s.model + (" (used)" if s.chosen else ""), s.heldout_px, " ".join(f"{f:.3f}" for f in s.folds_px),
              "best" if s.model == result.models.best else ""] for s in result.models.scores]
+    what = ("stereo held-out error: pairs left out of the fit, one board pose per pair fitted to both cameras"
+            if isinstance(result, StereoCalibration) else "held-out reprojection error: views left out of the fit")
     return html_table(["lens model (--distortion)", "held-out RMS (px)", "per fold (px)", ""], rows,
-                      caption="held-out reprojection error: views left out of the fit, each model", left=[0, 2])
+                      caption=f"{what}, each model", left=[0, 2])
 
 
 def _views_table(result: StereoCalibration) -> str:
     rows = [[v.name, v.left_px, v.right_px, v.stereo_px, "used" if v.used else v.reason] for v in result.views]
     rows += [[d.name, None, None, d.rms_px, d.reason] for d in result.dropped
              if not d.reason.startswith("outlier")]
+    rows += [[f"{g['name']} (corners)", None, None, None, f"{g['left']} left / {g['right']} right corners left out: "
+              f"{g['reason']}"] for g in result.corner_groups()]
     return html_table(["view", "left RMS (px)", "right RMS (px)", "both (px)", "status"], rows,
                       caption="every view: used, dropped as outlier, or skipped", left=[0, 4])
+
+
+def _board(pattern: tuple[int, int], square_m: float) -> str:
+    return f"chessboard {pattern[0]}x{pattern[1]} inner corners, {square_m * 1000:g} mm squares"
+
+
+def _honest_lines(result: StereoCalibration) -> list[str]:
+    """The stereo held-out error and the RMS over all corners, escaped paragraphs."""
+    out = []
+    sol = result.solution
+    if sol is not None and sol.corners_total:
+        rejected = sum(a + b for _, a, b in sol.rejected_corners)
+        out.append(f"RMS {sol.rms_px:.3f} px over the inlier corners, {sol.rms_all_px:.3f} px over all "
+                   f"{sol.corners_total} ({rejected} rejected as outliers).")
+    w = result.board_warp
+    if w is not None and w["heldout_flat_px"] is not None and w["heldout_warped_px"] is not None:
+        out.append(f"Board bend (mrcal-style parabola, at the board centre): x {w['warp_mm'][0]:+.3f} mm, y "
+                   f"{w['warp_mm'][1]:+.3f} mm; {'used' if w['used'] else 'not used'} (stereo held-out error "
+                   f"{w['heldout_flat_px']:.3f} px flat, {w['heldout_warped_px']:.3f} px bent).")
+    h = result.heldout
+    if h is not None:
+        out.append(f"Stereo held-out error {h.heldout_px:.3f} px over the inlier corners of pairs left out of the fit "
+                   f"({h.folds} folds; one board pose per held-out pair fitted to both cameras), {h.heldout_all_px:.3f}"
+                   f" px over all ({h.corners_rejected} of {h.corners_total} corners rejected).")
+    return list(out)
+
+
+def _std_table(result: StereoCalibration) -> str:
+    h = result.heldout
+    if h is None:
+        return "<p class='note'>too few pairs for the jackknife: std from the covariance only</p>"
+    rows = [[s.name, s.value, s.covariance, s.jackknife, s.source] for s in h.stds]
+    return html_table(["parameter (px; baseline m; rotation deg)", "value", "std (covariance)",
+                       f"std ({h.folds}-fold jackknife)", "reported"], rows,
+                      caption="both standard deviations; the larger is reported and written to the profile",
+                      left=[0, 4])
 
 
 def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
@@ -177,12 +223,13 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
     size = p.image_size
     rows = _camera_rows("left", p.left) + _camera_rows("right", p.right) + _extrinsic_rows(result)
     summary = ReportSection("Summary", paragraphs=[(
+        f"Board: {result.board or _board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; lens model {q.distortion_terms}; "
         f"RMS left {q.rms_left_px:.3f} px, right {q.rms_right_px:.3f} px, stereo {q.rms_stereo_px:.3f} px; "
         f"epipolar RMS after rectification {result.epipolar_rms_px:.3f} px; baseline {p.baseline_m * 1000:.2f} mm. "
-        "Convention: X_right = R X_left + T (metres).")]
+        "Convention: X_right = R X_left + T (metres).")] + _honest_lines(result)
         + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
-        tables=[html_table(["parameter", "value", "std", "relative std"], rows)])
+        tables=[html_table(["parameter", "value", "std", "relative std"], rows), _std_table(result)])
     models = ReportSection("Lens model comparison", tables=[_models_table(result)])
     views = list(result.views)
     chart = _error_chart([v.name for v in views], {"left": [v.left_px for v in views],
@@ -205,6 +252,15 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
                 {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
             ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
                                                  board_object_points(q.pattern, q.square_m), p.R, p.T))]))
+    if any(m is not None for maps in result.projection.values() for m in maps.values()):
+        rows = [[side, src, m.centre_px, m.corner_px] for side, maps in result.projection.items()
+                for src, m in maps.items() if m is not None]
+        sections.append(ReportSection("Projection uncertainty", paragraphs=[(
+            "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
+            "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
+            images=[("projection uncertainty over the image (the larger of the two)",
+                     projection_uncertainty(result.projection, size))],
+            tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])]))
     sections.append(ReportSection("Coverage", paragraphs=[(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
@@ -224,6 +280,7 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     q = result.profile.provenance.calibration
     assert q is not None
     summary = ReportSection("Summary", paragraphs=[(
+        f"Board: {_board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
         + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
         tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])

@@ -21,10 +21,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.joint import JointInit
-from s2r.calib.lens import LensModel
-from s2r.calib.observations import BoardObservation, StereoObservation
-from s2r.calib.solve import INIT_CRITERIA, MonoSolution, solve_mono_observations
+from s2r.calib.solve.cvsolve import INIT_CRITERIA, MonoSolution, solve_mono_observations
+from s2r.calib.solve.joint import JointInit
+from s2r.calib.solve.lens import LensModel
+from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.errors import CalibrationError
 
 __all__ = ["PairScore", "RigInit", "check_rig", "initial_rig", "pair_consistency"]

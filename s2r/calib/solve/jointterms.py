@@ -1,0 +1,243 @@
+"""The residuals and Jacobians of the joint stereo solve (:mod:`s2r.calib.solve.joint`), over every corner of
+every view at once: the solve's mutable parameters (:class:`State`), the corners gathered per camera, and the
+normal equations with each view's pose block kept apart for the Schur complement.
+
+Frames and units: board points in the board frame (metres); a view's pose takes them to the LEFT camera's
+optical frame, the pair's (``X_right = R X_left + T``) to the right one's; residuals are projected minus
+observed pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from s2r.calib.solve.lens import LensModel
+from s2r.calib.solve.observations import StereoObservation
+
+__all__ = ["Blocks", "CornerSet", "JointInit", "Masks", "State", "all_residuals", "camera_terms", "gather",
+           "normal_equations", "prepare", "rotations"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class JointInit:
+    """Starting point: K (3x3) and D (n_coef) per camera, R (3x3), T (3,) m, a board pose per view."""
+
+    K1: FloatArray
+    D1: FloatArray
+    K2: FloatArray
+    D2: FloatArray
+    R: FloatArray
+    T: FloatArray
+    rvecs: Sequence[FloatArray]
+    tvecs: Sequence[FloatArray]
+    warp: FloatArray | None = None
+
+
+class State:
+    """Mutable parameters of the solve."""
+
+    def __init__(self, lens: LensModel, init: JointInit, *, warp: bool = False,
+                 views: Sequence[StereoObservation] = ()) -> None:
+        self.lens = lens
+        self.nw = 2 if warp else 0
+        self.warp = np.zeros(2) if init.warp is None else np.asarray(init.warp, np.float64).reshape(2).copy()
+        pts = [o.obj for v in views for o in (v.left, v.right) if o is not None and len(o.obj)]
+        allp = np.concatenate(pts) if pts else np.zeros((1, 3))
+        self.span = (float(allp[:, 0].min()), float(np.ptp(allp[:, 0])) or 1.0,
+                     float(allp[:, 1].min()), float(np.ptp(allp[:, 1])) or 1.0)
+        self.K = [np.asarray(init.K1, np.float64).copy(), np.asarray(init.K2, np.float64).copy()]
+        self.D = [np.zeros(lens.n_coef), np.zeros(lens.n_coef)]
+        for d, src in zip(self.D, (init.D1, init.D2), strict=True):
+            src = np.asarray(src, np.float64).reshape(-1)[:lens.n_coef]
+            d[list(lens.free)] = src[list(lens.free)]
+        self.r_lr = np.asarray(cv2.Rodrigues(np.asarray(init.R, np.float64))[0], np.float64).reshape(3)
+        self.t_lr = np.asarray(init.T, np.float64).reshape(3).copy()
+        self.rv = [np.asarray(r, np.float64).reshape(3).copy() for r in init.rvecs]
+        self.tv = [np.asarray(t, np.float64).reshape(3).copy() for t in init.tvecs]
+
+    @property
+    def n_intr(self) -> int:
+        return 4 + len(self.lens.free)
+
+    def global_vec(self) -> FloatArray:
+        parts = []
+        for K, D in zip(self.K, self.D, strict=True):
+            parts += [[K[0, 0], K[1, 1], K[0, 2], K[1, 2]], D[list(self.lens.free)]]
+        return np.concatenate([*map(np.asarray, parts), self.warp[:self.nw], self.r_lr, self.t_lr])
+
+    def set_global(self, g: FloatArray) -> None:
+        ni = self.n_intr
+        for c in range(2):
+            v = g[c * ni:(c + 1) * ni]
+            self.K[c] = np.array([[v[0], 0, v[2]], [0, v[1], v[3]], [0, 0, 1.0]])
+            self.D[c][list(self.lens.free)] = v[4:]
+        self.warp[:self.nw] = g[2 * ni:2 * ni + self.nw]
+        e0 = 2 * ni + self.nw
+        self.r_lr, self.t_lr = g[e0:e0 + 3].copy(), g[e0 + 3:].copy()
+
+    def warp_basis(self, obj: FloatArray) -> FloatArray:
+        """(M, 2) board bend shapes at board points ``obj``: ``1 - u^2`` and ``1 - v^2`` with u, v in [-1, 1]
+        across the board's corners (mrcal's parabolic board warp: the bend at the centre, metres)."""
+        x0, wx, y0, wy = self.span
+        u, v = 2 * (obj[:, 0] - x0) / wx - 1, 2 * (obj[:, 1] - y0) / wy - 1
+        return np.column_stack([1 - u ** 2, 1 - v ** 2])
+
+    def copy_views(self) -> tuple[list[FloatArray], list[FloatArray]]:
+        return [r.copy() for r in self.rv], [t.copy() for t in self.tv]
+
+
+Masks = list[list[NDArray[np.bool_] | None]]
+#: Per active view (in ``active`` order): A_gv (n, ng, 6), A_vv (n, 6, 6), b_v (n, 6).
+Blocks = tuple[FloatArray, FloatArray, FloatArray]
+
+
+@dataclass(frozen=True)
+class CornerSet:
+    """One camera's (inlier) corners of the active views, concatenated view by view: board points (M, 3) m,
+    pixels (M, 2), each corner's view (position in ``active``) and its place within that view."""
+
+    obj: FloatArray
+    img: FloatArray
+    seg: NDArray[np.intp]
+    pos: NDArray[np.intp]
+    width: int
+
+
+def gather(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int], cam: int
+            ) -> CornerSet | None:
+    """The corners of one camera (all of them when ``masks`` is None), or None when it saw none."""
+    objs, imgs, seg = [], [], []
+    for j, k in enumerate(active):
+        obs = views[k].left if cam == 0 else views[k].right
+        mask = None if obs is None else (np.ones(len(obs.ids), bool) if masks is None else masks[k][cam])
+        if obs is None or mask is None or not mask.any():
+            continue
+        objs.append(obs.obj[mask])
+        imgs.append(obs.img[mask])
+        seg.append(np.full(int(mask.sum()), j, np.intp))
+    if not objs:
+        return None
+    segs = np.concatenate(seg)
+    starts = np.flatnonzero(np.r_[True, segs[1:] != segs[:-1]])
+    counts = np.diff(np.r_[starts, len(segs)])
+    pos = np.arange(len(segs)) - np.repeat(starts, counts)
+    return CornerSet(np.concatenate(objs).astype(np.float64), np.concatenate(imgs).astype(np.float64), segs, pos,
+                    int(counts.max()))
+
+
+def prepare(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int]
+             ) -> tuple[CornerSet | None, CornerSet | None]:
+    return gather(views, masks, active, 0), gather(views, masks, active, 1)
+
+
+def rotations(rvecs: Sequence[FloatArray]) -> tuple[FloatArray, FloatArray]:
+    """Rotation matrices (n, 3, 3) and their derivatives (n, 3, 3, 3): ``dR[i, j]`` = dR_i / d r_j."""
+    Rs, dRs = [], []
+    for r in rvecs:
+        R, jac = cv2.Rodrigues(np.asarray(r, np.float64).reshape(3, 1))
+        Rs.append(R)
+        dRs.append(np.asarray(jac, np.float64).reshape(3, 3, 3))
+    return np.asarray(Rs, np.float64).reshape(-1, 3, 3), np.asarray(dRs, np.float64).reshape(-1, 3, 3, 3)
+
+
+def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, FloatArray, FloatArray]
+                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Residuals (M, 2) px, global Jacobian (M, 2, ng) and view Jacobian (M, 2, 6) of one camera's corners.
+
+    Board points go to the camera frame here (the view's pose, then the pair's for the right camera) and are
+    projected in one call with a zero pose, whose translation Jacobian is d pixel / d point. ``poses``: the
+    active views' rotations (n, 3, 3), their derivatives (n, 3, 3, 3) and translations (n, 3)."""
+    ni, nw = state.n_intr, state.nw
+    e0 = 2 * ni + nw
+    ng = e0 + 6
+    m = len(c.obj)
+    R, dR, t = poses
+    obj = c.obj
+    if nw:
+        basis = state.warp_basis(obj)
+        obj = obj.copy()
+        obj[:, 2] += basis @ state.warp
+        dX_dw = R[c.seg][:, :, 2:3] * basis[:, None, :]  # (M, 3, 2)
+    X = (R[c.seg] @ obj[:, :, None])[:, :, 0] + t[c.seg]
+    dX_dr = (dR[c.seg].reshape(m, 9, 3) @ obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
+    Jg = np.zeros((m, 2, ng))
+    if cam == 1:
+        R_lr, dR_lr = rotations([state.r_lr])
+        dX_drlr = (X @ dR_lr[0].reshape(9, 3).T).reshape(m, 3, 3).transpose(0, 2, 1)
+        X = X @ R_lr[0].T + state.t_lr
+        dX_dr = R_lr[0] @ dX_dr
+        if nw:
+            dX_dw = R_lr[0] @ dX_dw
+    pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
+    jac = jac.reshape(m, 2, -1)
+    dp_dX = jac[:, :, 3:6]
+    cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
+    Jg[:, :, cam * ni:(cam + 1) * ni] = jac[:, :, cols]
+    if nw:
+        Jg[:, :, 2 * ni:e0] = dp_dX @ dX_dw
+    if cam == 1:
+        Jg[:, :, e0:e0 + 3] = dp_dX @ dX_drlr
+        Jg[:, :, e0 + 3:] = dp_dX
+        dp_dt = dp_dX @ R_lr[0]
+    else:
+        dp_dt = dp_dX
+    Jv = np.concatenate([dp_dX @ dX_dr, dp_dt], axis=2)
+    return pts.reshape(m, 2) - c.img, Jg, Jv
+
+
+def padded(values: FloatArray, c: CornerSet, n: int) -> FloatArray:
+    """(M, 2, k) per-corner rows into (n views, 2 * width, k), zero where a view has fewer corners."""
+    out = np.zeros((n, c.width, *values.shape[1:]))
+    out[c.seg, c.pos] = values
+    return out.reshape(n, 2 * c.width, -1)
+
+
+def normal_equations(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
+                      data: tuple[CornerSet | None, CornerSet | None] | None = None
+                      ) -> tuple[float, int, FloatArray, FloatArray, Blocks]:
+    """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v); ``data``: the gathered corners
+    (:func:`prepare`) when the caller already has them."""
+    ng = 2 * state.n_intr + state.nw + 6
+    n = len(active)
+    A, b = np.zeros((ng, ng)), np.zeros(ng)
+    Agv, Avv, bv = np.zeros((n, ng, 6)), np.zeros((n, 6, 6)), np.zeros((n, 6))
+    ssr, count = 0.0, 0
+    R, dR = rotations([state.rv[k] for k in active])
+    poses = (R, dR, np.asarray([state.tv[k] for k in active], np.float64).reshape(-1, 3))
+    for cam, c in enumerate(data if data is not None else prepare(views, masks, active)):
+        if c is None:
+            continue
+        r, Jg, Jv = camera_terms(state, cam, c, poses)
+        ssr += float(np.sum(r * r))
+        count += r.size
+        Jg2 = Jg.reshape(-1, ng)
+        A += Jg2.T @ Jg2
+        b += Jg2.T @ r.reshape(-1)
+        Pg, Pv, Pr = padded(Jg, c, n), padded(Jv, c, n), padded(r[:, :, None], c, n)
+        PvT = Pv.transpose(0, 2, 1)
+        Agv += Pg.transpose(0, 2, 1) @ Pv
+        Avv += PvT @ Pv
+        bv += (PvT @ Pr)[:, :, 0]
+    return ssr, count, A, b, (Agv, Avv, bv)
+
+
+def all_residuals(state: State, views: Sequence[StereoObservation], ks: Sequence[int]
+                   ) -> dict[int, tuple[FloatArray | None, FloatArray | None]]:
+    """Residuals (N, 2) px of ALL corners of views ``ks`` per camera (None where a camera saw nothing)."""
+    out: dict[int, list[FloatArray | None]] = {k: [None, None] for k in ks}
+    R, dR = rotations([state.rv[k] for k in ks])
+    poses = (R, dR, np.asarray([state.tv[k] for k in ks], np.float64).reshape(-1, 3))
+    for cam, c in enumerate(prepare(views, None, ks)):
+        if c is None:
+            continue
+        r, _, _ = camera_terms(state, cam, c, poses)
+        for j in np.unique(c.seg):
+            out[ks[int(j)]][cam] = r[c.seg == j]
+    return {k: (v[0], v[1]) for k, v in out.items()}

@@ -1,0 +1,118 @@
+"""Projection uncertainty in pixels (mrcal-style): how far a point seen at a pixel may land under other
+plausible calibrations, over the image, at a chosen distance.
+
+For a grid of pixels ``q`` the solved camera's rays are taken to points at depth ``distance_m`` (metres, camera
+frame). Each alternative calibration (samples drawn from the solve's covariance of the intrinsics, or the
+jackknife folds' intrinsics) projects those points after the small camera rotation that best aligns it with
+the solved camera (a rotation of the camera is absorbed by the board poses and is no error of the
+intrinsics; mrcal compensates it the same way). The spread of the projections (px, worst direction: the
+square root of the largest eigenvalue of the 2x2 covariance; for the jackknife scaled by (K-1)) is the
+uncertainty at ``q``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["DISTANCE_M", "ProjectionMap", "covariance_samples", "projection_map"]
+
+FloatArray = NDArray[np.float64]
+#: Depth (m) at which the projection uncertainty is reported.
+DISTANCE_M = 1.0
+_GRID = (16, 10)
+_SAMPLES = 32
+Intrinsics = tuple[FloatArray, FloatArray]
+
+
+@dataclass(frozen=True)
+class ProjectionMap:
+    """Uncertainty (px) on a grid of pixels ``xs`` x ``ys`` (``sigma[j, i]`` at ``(xs[i], ys[j])``); the
+    value at the image centre and the largest at the four image corners; ``source`` what was resampled."""
+
+    xs: FloatArray
+    ys: FloatArray
+    sigma: FloatArray
+    centre_px: float
+    corner_px: float
+    distance_m: float
+    source: str
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready summary (the grid itself stays out of the JSON)."""
+        return {"centre_px": self.centre_px, "corner_px": self.corner_px, "distance_m": self.distance_m,
+                "source": self.source}
+
+
+def _grid(size: tuple[int, int]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    w, h = size
+    xs, ys = np.linspace(0, w - 1, _GRID[0]), np.linspace(0, h - 1, _GRID[1])
+    q = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    return xs, ys, q
+
+
+def _points(q: FloatArray, K: FloatArray, D: FloatArray, distance_m: float) -> FloatArray:
+    norm = cv2.undistortPoints(q.reshape(-1, 1, 2), K, D).reshape(-1, 2)
+    return np.column_stack([norm * distance_m, np.full(len(norm), distance_m)])
+
+
+def _aligned(P: FloatArray, q: FloatArray, K: FloatArray, D: FloatArray) -> FloatArray:
+    """Projections (N, 2) of ``P`` by (K, D) after the camera rotation that best matches ``q`` (Gauss-Newton)."""
+    rvec, t0 = np.zeros(3), np.zeros(3)
+    for _ in range(5):
+        pts, jac = cv2.projectPoints(P.reshape(-1, 1, 3), rvec, t0, K, D)
+        r = (pts.reshape(-1, 2) - q).reshape(-1)
+        J = np.asarray(jac, np.float64)[:, :3]
+        step = np.linalg.lstsq(J, -r, rcond=None)[0]
+        rvec = rvec + step
+        if np.linalg.norm(step) < 1e-12:
+            break
+    return np.asarray(cv2.projectPoints(P.reshape(-1, 1, 3), rvec, t0, K, D)[0], np.float64).reshape(-1, 2)
+
+
+def _worst(dev: FloatArray, scale: float) -> FloatArray:
+    """Worst-direction std per point from deviations (S, N, 2) around their mean."""
+    d = dev - dev.mean(axis=0)
+    cov = np.einsum("sni,snj->nij", d, d) * scale
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(cov)[:, -1], 0.0))
+
+
+def projection_map(K: FloatArray, D: FloatArray, size: tuple[int, int], samples: Sequence[Intrinsics], *,
+                   jackknife: bool, distance_m: float = DISTANCE_M) -> ProjectionMap | None:
+    """The uncertainty map of camera (K, D) from alternative intrinsics ``samples`` (covariance draws, or
+    the jackknife folds' when ``jackknife``); None with fewer than 2 samples."""
+    if len(samples) < 2:
+        return None
+    xs, ys, grid = _grid(size)
+    w, h = size
+    q = np.vstack([grid, [[(w - 1) / 2, (h - 1) / 2]]])  # the grid and the image centre, aligned together
+    P = _points(q, K, D, distance_m)
+    dev = np.array([_aligned(P, q, Ks, Ds) - q for Ks, Ds in samples])
+    k = len(samples)
+    every = _worst(dev, (k - 1) / k if jackknife else 1.0 / (k - 1))
+    sigma, centre = every[:-1].reshape(len(ys), len(xs)), every[-1:]
+    corners = [sigma[0, 0], sigma[0, -1], sigma[-1, 0], sigma[-1, -1]]
+    return ProjectionMap(xs, ys, sigma, float(centre[0]), float(max(corners)), distance_m,
+                         "jackknife" if jackknife else "covariance")
+
+
+def covariance_samples(K: FloatArray, D: FloatArray, cov: FloatArray, free: Sequence[int], *,
+                       count: int = _SAMPLES, seed: int = 0) -> list[Intrinsics]:
+    """Intrinsics drawn from N(solution, cov) over ``(fx, fy, cx, cy, D[free])`` (a fixed seed: the same
+    calibration always gives the same map); empty when the covariance is not finite."""
+    if not np.all(np.isfinite(cov)):
+        return []
+    mean = np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.asarray(D, np.float64).reshape(-1)[list(free)]])
+    rng = np.random.default_rng(seed)
+    draws = rng.multivariate_normal(mean, cov, size=count, method="eigh")
+    out = []
+    for v in draws:
+        Ks = np.array([[v[0], 0.0, v[2]], [0.0, v[1], v[3]], [0.0, 0.0, 1.0]])
+        Ds = np.asarray(D, np.float64).reshape(-1).copy()
+        Ds[list(free)] = v[4:]
+        out.append((Ks, Ds))
+    return out

@@ -1,0 +1,76 @@
+"""Stereo held-out error and jackknife std on independent known-answer rigs; no valid board lost."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from s2r.calib.detect import Detection, detect_board
+from s2r.calib.solve.resample import PARAMETERS, split_folds
+from s2r.calib.solve.stereo import calibrate_stereo_detections
+from s2r.profile import StereoProfile
+from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
+
+
+def _pairs(rig: Rig) -> list[tuple[str, Detection, Detection]]:
+    return [(f"{i:02d}", Detection(f"left/{i:02d}", "", "ok", size=SIZE, corners=a.astype(np.float32)),
+             Detection(f"right/{i:02d}", "", "ok", size=SIZE, corners=b.astype(np.float32)))
+            for i, (a, b) in enumerate(zip(rig.left, rig.right, strict=True))]
+
+
+def test_folds_interleave_and_keep_five_training_views() -> None:
+    assert split_folds(13) == [[0, 4, 8, 12], [1, 5, 9], [2, 6, 10], [3, 7, 11]]
+    assert all(7 - len(f) >= 5 for f in split_folds(7)) and split_folds(5) == []
+
+
+def test_heldout_error_and_both_std_on_a_clean_rig() -> None:
+    rig = make_rig(21, views=16, noise_px=0.1, k3_max=0.0)
+    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1)
+    held, fig = res.heldout, res.figures()
+    assert held is not None and held.folds == 4 and not held.failed
+    # pure noise of 0.1 px per coordinate: about 0.14 px per corner, a little more on views left out
+    assert 0.12 < res.profile.provenance.calibration.rms_stereo_px < 0.16  # type: ignore[union-attr]
+    assert res.profile.provenance.calibration.rms_stereo_px < held.heldout_px < 0.2  # type: ignore[union-attr]
+    assert held.heldout_px <= held.heldout_all_px and held.corners_total == 16 * 2 * PATTERN[0] * PATTERN[1]
+    params = fig["stereo_heldout"]["parameters"]
+    assert set(params) == set(PARAMETERS)
+    for name, p in params.items():
+        assert p["std"] == max(p["std_covariance"], p["std_jackknife"]), name
+        # noise only: the jackknife estimates the same spread as the covariance (4 folds: a rough estimate)
+        assert 0.2 < p["std_jackknife"] / p["std_covariance"] < 4, name
+    left = res.profile.left
+    assert left.std is not None and left.std.fx_px == params["left fx"]["std"]
+    assert abs(left.fx_px - rig.left_lens.fx) <= 4 * params["left fx"]["std"]
+    assert abs(res.profile.baseline_m - rig.baseline_m) <= 4 * params["baseline"]["std"]
+    maps = fig["projection_uncertainty"]["left"]
+    assert maps["covariance"]["centre_px"] < maps["covariance"]["corner_px"] < 2.0
+
+
+def test_a_board_fast_check_misses_is_found(synthetic_set: tuple[Path, StereoProfile]) -> None:
+    """right/03 of the synthetic set shows a nearly edge-on board: FAST_CHECK rejects it, plain
+    findChessboardCorners (the retry) finds it, and so does s2r."""
+    gray = cv2.imread(str(synthetic_set[0] / "right" / "03.png"), cv2.IMREAD_GRAYSCALE)
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+    assert not cv2.findChessboardCorners(gray, (9, 6), flags=flags | cv2.CALIB_CB_FAST_CHECK)[0]
+    ok, plain = cv2.findChessboardCorners(gray, (9, 6), flags=flags)
+    corners, detector = detect_board(gray, (9, 6))
+    assert ok and corners is not None and detector == "classic-plain"
+    assert float(np.max(np.abs(corners - plain.reshape(-1, 2)))) < 1.5  # the same board, refined
+
+
+def test_a_bent_board_is_solved_and_used_where_it_lowers_the_heldout_error() -> None:
+    rig = make_rig(23, views=16, noise_px=0.05, k3_max=0.0, bend_m=(-0.0002, 0.0005))
+    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                      compare=False)
+    warp = res.figures()["board_warp"]
+    assert warp is not None and warp["used"] and warp["heldout_warped_px"] < warp["heldout_flat_px"]
+    for got, true, sd in zip(warp["warp_mm"], (-0.2, 0.5), warp["warp_std_mm"], strict=True):
+        assert abs(got - true) <= max(4 * sd, 0.02), (got, true, sd)
+    assert abs(res.profile.left.fx_px - rig.left_lens.fx) < 0.001 * rig.left_lens.fx
+    flat = make_rig(24, views=16, noise_px=0.05, k3_max=0.0)
+    flat_warp = calibrate_stereo_detections(_pairs(flat), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                            compare=False).figures()["board_warp"]
+    assert flat_warp["warp_mm"] == pytest.approx([0, 0], abs=0.05)
