@@ -20,11 +20,12 @@ from numpy.typing import NDArray
 
 from s2r.drift.matches import FrameMatches, match_frame
 from s2r.drift.model import MODELS, fit_rotation, predict_right, robust_scale
+from s2r.errors import CheckError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 
-__all__ = ["AXES", "BLIND_SPOTS", "CONVENTION", "CheckSettings", "DriftResult", "check_drift"]
+__all__ = ["AXES", "BLIND_SPOTS", "CONVENTION", "CheckSettings", "DriftResult", "check_drift", "check_image_sizes"]
 
 FloatArray = NDArray[np.float64]
 AXES = ("pitch", "yaw", "roll")  # about the right camera's optical x, y, z
@@ -149,6 +150,11 @@ def _costs(profile: StereoProfile, rect: Any, omega: FloatArray, sigma: FloatArr
            ) -> tuple[dict[str, float], list[dict[str, float]]]:
     """Rows of mismatch the rotation causes over the image (px) and its depth bias at the image centre (with
     the sigma that yaw's sigma gives it: an unresolved yaw leaves the depth scale open)."""
+    if not np.all(np.isfinite(omega)):  # not estimated: no cost to state
+        nan = float("nan")
+        return ({"median": nan, "p95": nan, "max": nan},
+                [{"distance_m": z, "depth_error_m": nan, "depth_error_pct": nan, "depth_error_sigma_pct": nan}
+                 for z in distances])
     w, h = rect.image_size
     u, v = np.meshgrid(np.linspace(0, w - 1, 17), np.linspace(0, h - 1, 13))
     grid = np.column_stack([u.ravel(), v.ravel()])
@@ -174,15 +180,37 @@ def _seen_depth(profile: StereoProfile, rect: Any, centre: FloatArray, z: float,
     return rect.fx_px * rect.baseline_m / seen if seen > 0 else float("inf")
 
 
+def _looks_swapped(matches: int, frames: list[FrameMatches], settings: CheckSettings) -> bool:
+    """Many matches lie clearly behind the rig (a quarter or more; a good pair has only stray mismatches there):
+    the left and right images (or cameras) are swapped. Far points stay near zero disparity either way, so a
+    swapped pair of a mostly distant scene still has matches "in front"."""
+    behind = sum(f.behind for f in frames)
+    return behind >= max(settings.min_matches // 2, 0.25 * (matches + behind))
+
+
+def _cannot_tell(matches: int, frames: list[FrameMatches], settings: CheckSettings) -> str:
+    """Why too few matches: identical images, a swapped pair, blur or no texture (one sentence)."""
+    identical = [f.name for f in frames if f.identical]
+    if identical:
+        return (f"left and right are the same image in {len(identical)} of {len(frames)} frames "
+                f"({', '.join(identical[:3])}): the recording holds one camera twice")
+    behind = sum(f.behind for f in frames)
+    if _looks_swapped(matches, frames, settings):
+        return (f"left and right look swapped: {behind} matches lie behind the rig (negative disparity) against "
+                f"{matches} in front; swap the recording's left and right (or the profile's cameras)")
+    why = f"only {matches} usable matches (need {settings.min_matches})"
+    blurred = [f.name for f in frames if f.sharpness < 20.0]
+    if blurred:
+        why += f"; blurred or textureless frames: {', '.join(blurred[:5])}"
+    return why + ": record scenes with texture at several depths, camera still"
+
+
 def _verdict(omega_deg: FloatArray, sigma_deg: FloatArray, matches: int, frames: list[FrameMatches],
              settings: CheckSettings) -> tuple[str, list[str]]:
     tol = np.asarray(settings.tolerance_deg)
-    if matches < settings.min_matches:
-        blurred = [f.name for f in frames if f.sharpness < 20.0]
-        why = f"only {matches} usable matches (need {settings.min_matches})"
-        if blurred:
-            why += f"; blurred or textureless frames: {', '.join(blurred[:5])}"
-        return "cannot tell", [why + ": record scenes with texture at several depths, camera still"]
+    if matches < settings.min_matches or not np.all(np.isfinite(omega_deg)) or _looks_swapped(matches, frames,
+                                                                                               settings):
+        return "cannot tell", [_cannot_tell(matches, frames, settings)]
     drifted = [f"{a} {o:+.3f} deg (+/- {s:.3f}) beyond {t:g} deg" for a, o, s, t in
                zip(AXES, omega_deg, sigma_deg, tol, strict=True)
                if abs(o) > t and abs(o) > settings.significance * s]
@@ -200,6 +228,15 @@ def _verdict(omega_deg: FloatArray, sigma_deg: FloatArray, matches: int, frames:
     return "good", reasons
 
 
+def check_image_sizes(profile: StereoProfile, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8]) -> None:
+    """CheckError naming frame ``name`` when an image is not the size its camera has in ``profile``."""
+    for side, cam, image in (("left", profile.left, left), ("right", profile.right, right)):
+        if image.shape[:2] != (cam.height_px, cam.width_px):
+            raise CheckError(f"{side} image is {image.shape[1]}x{image.shape[0]} px but the profile "
+                             f"{profile.name!r} has {cam.width_px}x{cam.height_px}", path=name, field="image size",
+                             hint="check the recording with the profile of the camera that took it")
+
+
 def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
                 settings: CheckSettings = CheckSettings(), progress: ProgressCallback | None = None,
                 total: int | None = None) -> DriftResult:
@@ -207,6 +244,7 @@ def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
     rect = stereo_rectification(profile)
     frames: list[FrameMatches] = []
     for k, (name, left, right) in enumerate(pairs, start=1):
+        check_image_sizes(profile, name, left, right)
         frames.append(match_frame(profile, rect, left, right, name=name))
         report(progress, k, total or k, "matching features")
     left_px = np.vstack([f.left for f in frames]) if frames else np.zeros((0, 2))
@@ -218,9 +256,8 @@ def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
 def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], left: FloatArray, right: FloatArray,
                frame_of: NDArray[np.int_], settings: CheckSettings) -> DriftResult:
     n = len(left)
-    zero = np.zeros(3)
-    if n < max(10, settings.min_matches // 2):
-        omega, cov, spread = zero, np.full((3, 3), np.nan), zero
+    if n < max(10, settings.min_matches // 2):  # not estimated: NaN, never a confident zero
+        omega, cov, spread = np.full(3, np.nan), np.full((3, 3), np.nan), np.full(3, np.nan)
     else:
         omega, cov, spread, _ = _fit_both(profile, rect, left, right)
     formal = np.sqrt(np.clip(np.diag(cov), 0, None)) if n else np.full(3, np.nan)
@@ -228,7 +265,7 @@ def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], le
     groups = frame_of if use_frames else _region_groups(left, rect.image_size)
     resampled = _resampled(profile, rect, groups, left, right) if n >= settings.min_matches else None
     sigma = np.sqrt(np.fmax(formal, resampled if resampled is not None else 0.0) ** 2 + spread**2
-                    + _lens_floor(profile) ** 2)
+                    + _lens_floor(profile) ** 2) if np.all(np.isfinite(omega)) else np.full(3, np.nan)
     source = ("formal (residual-scaled)" if resampled is None or np.all(formal >= resampled)
               else f"jackknife over {'frames' if use_frames else 'image regions'}") + " + model spread" + (
         " + lens floor on yaw" if _lens_floor(profile)[1] > 0 else "")

@@ -1,0 +1,139 @@
+"""s2r check / fleet check against hostile and careless inputs: every refusal is one line, nothing is written
+outside -o, a swapped or duplicated pair is named, not judged. Recordings come from tests/drift/warp_gen.py."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from s2r.cli import main
+from s2r.formats.s2r_yaml import dump_profile
+from s2r.profile import StereoProfile
+from tests.conftest import make_rig
+from tests.drift.warp_gen import Cam, render_pair, rotvec_matrix
+
+SIZE = (320, 240)
+
+
+def small_rig() -> StereoProfile:
+    return make_rig(name="hostile_rig", width=SIZE[0], height=SIZE[1], hfov_rad=1.1, baseline_m=0.08,
+                    rotation_deg=(0.2, -0.3, 0.1), origin="real")
+
+
+def _write(folder: Path, profile: StereoProfile, *, frames: int, turn_deg: tuple[float, float, float] = (0, 0, 0),
+           swap: bool = False) -> Path:
+    c = profile.left
+    cam = Cam(c.width_px, c.height_px, c.fx_px, c.fy_px, c.cx_px, c.cy_px)
+    for side in ("left", "right"):
+        (folder / side).mkdir(parents=True, exist_ok=True)
+    for k in range(frames):
+        left, right = render_pair(cam, cam, profile.R, profile.T.reshape(3), rotvec_matrix(np.radians(turn_deg)),
+                                  seed=50 + k, plane_depth_m=0.8)
+        if swap:
+            left, right = right, left
+        cv2.imwrite(str(folder / "left" / f"{k:02d}.png"), left)
+        cv2.imwrite(str(folder / "right" / f"{k:02d}.png"), right)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("hostile_drift")
+    dump_profile(small_rig(), root / "rig.yaml")
+    _write(root / "rec", small_rig(), frames=2)
+    return root
+
+
+def _err(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    return err.splitlines()[-1]
+
+
+def test_images_of_another_size_are_one_line_naming_the_file(capsys: pytest.CaptureFixture[str], base: Path) -> None:
+    assert main(["check", "realsense_d435_848x480", str(base / "rec")]) == 2
+    err = _err(capsys)
+    assert err.startswith(f"error: {base / 'rec' / 'left' / '00.png'}: image size:") and "848x480" in err
+
+
+def test_a_recording_of_fifos_or_devices_is_bad_input(capsys: pytest.CaptureFixture[str], base: Path,
+                                                      tmp_path: Path) -> None:
+    for side in ("left", "right"):
+        (tmp_path / side).mkdir()
+    (tmp_path / "left" / "00.png").write_bytes((base / "rec" / "left" / "00.png").read_bytes())
+    os.mkfifo(tmp_path / "right" / "00.png")
+    (tmp_path / "right" / "01.png").symlink_to("/dev/zero")
+    assert main(["check", str(base / "rig.yaml"), str(tmp_path)]) == 2
+    assert "no left/right image pairs" in _err(capsys)
+
+
+def test_identical_and_swapped_pairs_are_named_not_judged(capsys: pytest.CaptureFixture[str], base: Path,
+                                                          tmp_path: Path) -> None:
+    twice = tmp_path / "twice"
+    for side in ("left", "right"):
+        (twice / side).mkdir(parents=True)
+        (twice / side / "00.png").write_bytes((base / "rec" / "left" / "00.png").read_bytes())
+    assert main(["check", str(base / "rig.yaml"), str(twice), "--json"]) == 1
+    result = json.loads(capsys.readouterr().out)
+    assert result["verdict"] == "cannot tell" and "same image" in result["reasons"][0]
+    assert result["rotation_error_deg"]["roll"] is None  # not estimated is not a confident zero
+    swapped = _write(tmp_path / "swapped", small_rig(), frames=1, swap=True)
+    assert main(["check", str(base / "rig.yaml"), str(swapped), "--json"]) == 1
+    result = json.loads(capsys.readouterr().out)
+    assert result["verdict"] == "cannot tell" and "look swapped" in result["reasons"][0]
+
+
+def test_one_frame_is_enough_to_judge(capsys: pytest.CaptureFixture[str], base: Path, tmp_path: Path) -> None:
+    one = tmp_path / "one"
+    for side in ("left", "right"):
+        (one / side).mkdir(parents=True)
+        (one / side / "00.png").write_bytes((base / "rec" / side / "00.png").read_bytes())
+    assert main(["check", str(base / "rig.yaml"), str(one), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["verdict"] == "good" and result["sigma_resampled_deg"] is not None  # jackknife over regions
+
+
+@pytest.mark.parametrize("name", ["..", ".", ".hidden", "a/b", "../up", "index.html", "SUMMARY.json"])
+def test_fleet_names_cannot_leave_or_shadow_the_output(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                       name: str) -> None:
+    fleet = tmp_path / "fleet.yaml"
+    fleet.write_text(json.dumps({"robots": [{"name": name, "profile": "p.yaml", "recording": "r"}]}))
+    assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "out")]) == 2
+    assert ".name: bad or repeated name" in _err(capsys)
+    assert not (tmp_path / "out").exists() and not (tmp_path / "check.html").exists()
+
+
+def test_fleet_names_repeated_ignoring_case_are_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    fleet = tmp_path / "fleet.yaml"
+    robots = [{"name": n, "profile": "p.yaml", "recording": "r"} for n in ("R1", "r1")]
+    fleet.write_text(json.dumps({"robots": robots}))
+    assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "out")]) == 2
+    assert "robots[1].name" in _err(capsys)
+
+
+def test_a_scheduler_that_never_answers_fails_fast(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                   base: Path) -> None:
+    fleet = tmp_path / "fleet.yaml"
+    fleet.write_text(json.dumps({"robots": [{"name": "a", "profile": str(base / "rig.yaml"),
+                                             "recording": str(base / "rec")}]}))
+    with socket.socket() as silent:  # accepts connections, never says a word
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(4)
+        address = f"tcp://127.0.0.1:{silent.getsockname()[1]}"
+        start = time.monotonic()
+        assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--scheduler", address]) == 2
+        waited = time.monotonic() - start
+    err = _err(capsys)
+    assert err.startswith(f"error: {address}: --scheduler: cannot reach the Dask scheduler")
+    assert waited < 30.0  # Dask alone would wait out its 30 s tcp timeout in the handshake
+    for bad in ("notanaddress", "http://127.0.0.1:1"):
+        assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--scheduler", bad]) == 2
+        assert "--scheduler: cannot reach the Dask scheduler: not an address" in _err(capsys)
+    assert not (tmp_path / "o").exists()
