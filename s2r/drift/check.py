@@ -242,6 +242,10 @@ def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
                 total: int | None = None) -> DriftResult:
     """Check ``profile`` against raw grey stereo pairs ``(name, left, right)`` of ordinary scenes."""
     rect = stereo_rectification(profile)
+    if abs(rect.P2[1, 3]) > abs(rect.P2[0, 3]):  # OpenCV rectified it top-bottom: epipolar lines are columns
+        raise CheckError("the baseline is vertical (one camera above the other); s2r check measures the vertical "
+                         "disparity of side-by-side rigs only", path=profile.name, field="extrinsics.translation_m",
+                         hint="turn the images and the profile by 90 degrees so the cameras sit side by side")
     frames: list[FrameMatches] = []
     for k, (name, left, right) in enumerate(pairs, start=1):
         check_image_sizes(profile, name, left, right)

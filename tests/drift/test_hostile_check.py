@@ -137,3 +137,34 @@ def test_a_scheduler_that_never_answers_fails_fast(capsys: pytest.CaptureFixture
         assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--scheduler", bad]) == 2
         assert "--scheduler: cannot reach the Dask scheduler: not an address" in _err(capsys)
     assert not (tmp_path / "o").exists()
+
+
+def test_a_vertical_rig_is_refused_in_one_line(capsys: pytest.CaptureFixture[str], base: Path,
+                                               tmp_path: Path) -> None:
+    from s2r.profile import Extrinsics
+
+    profile = small_rig()
+    T = -profile.R @ np.array([0.0, 0.08, 0.0])  # the right camera 8 cm below the left
+    vertical = profile.model_copy(update={"extrinsics": Extrinsics(
+        rotation=tuple(map(tuple, profile.R.tolist())), translation_m=tuple(T.tolist()))})  # type: ignore[arg-type]
+    dump_profile(vertical, tmp_path / "vertical.yaml")
+    assert main(["check", str(tmp_path / "vertical.yaml"), str(base / "rec")]) == 2
+    err = _err(capsys)
+    assert "extrinsics.translation_m: the baseline is vertical" in err
+
+
+def test_a_fleet_output_is_published_whole_or_not_at_all(capsys: pytest.CaptureFixture[str], base: Path,
+                                                         tmp_path: Path) -> None:
+    fleet = tmp_path / "fleet.yaml"
+    robots = [{"name": n, "profile": str(base / "rig.yaml"), "recording": str(tmp_path / "missing")}
+              for n in ("a", "b")]
+    fleet.write_text(json.dumps({"robots": robots}))
+    out = tmp_path / "out"
+    (out / "summary.json").mkdir(parents=True)  # in the way of the last-but-one file, even with --force
+    assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 2
+    assert "summary.json" in _err(capsys)
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]  # no robot folder, no index.html
+    (out / "summary.json").rmdir()
+    assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 1
+    assert sorted(p.name for p in out.iterdir()) == ["a", "b", "index.html", "summary.json"]
+    assert (out / "a" / "check.json").is_file() and not (out / "a" / "check.html").exists()  # failed: no report
