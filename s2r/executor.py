@@ -150,10 +150,21 @@ def _dask_client(*, workers: int, scheduler: str | None) -> tuple[Any, Any]:
                        hint="pip install 'distributed' (make installs it)") from None
     if scheduler is not None:
         return _connect(Client, scheduler), None
-    cluster = LocalCluster(  # type: ignore[no-untyped-call]
-        n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-        silence_logs=40, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})  # its http server: loopback, any port
+    try:
+        cluster = _local_cluster(LocalCluster, workers)
+    except Exception as exc:  # e.g. a script without a main guard, whose spawned workers cannot start
+        raise S2RError(f"could not start a local Dask cluster of {workers} workers: {type(exc).__name__}: "
+                       f"{' '.join(str(exc).split())[:200]}", field="--workers",
+                       hint="fewer --workers, or a running scheduler with --scheduler; a script calling s2r needs "
+                       "an `if __name__ == \"__main__\":` guard") from None
     return Client(cluster), cluster  # type: ignore[no-untyped-call]
+
+
+def _local_cluster(cluster_type: Any, workers: int) -> Any:
+    """Dask's LocalCluster of ``workers`` single-threaded processes, every socket on loopback, no dashboard."""
+    return cluster_type(  # type: ignore[no-untyped-call]
+        n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        silence_logs=40, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})  # its http server: loopback
 
 
 def _unreachable(scheduler: str, why: str) -> S2RError:

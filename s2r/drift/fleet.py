@@ -33,13 +33,16 @@ from s2r.executor import open_runner
 from s2r.fileio import parse_yaml, read_text_file
 from s2r.progress import ProgressCallback, report
 
-__all__ = ["SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
+__all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
 
 #: Verdicts from most to least severe (the summary's sort order).
 SEVERITY = ("failed", "drifted", "cannot tell", "good")
 _NAME = re.compile(r"^[A-Za-z0-9_\-][A-Za-z0-9_.\-]{0,63}$")  # never "." or "..": names are folders in -o
 #: Names the fleet's own output files take in -o (compared case-insensitively, as some file systems do).
 RESERVED_NAMES = frozenset({"index.html", "summary.json"})
+#: Largest fleet file (characters) and number of robots in one run.
+MAX_FLEET_CHARS = 4_000_000
+MAX_ROBOTS = 10_000
 _RECORDING_KEYS = {"folder", "left", "right", "bag", "left_topic", "right_topic", "max_frames"}
 
 
@@ -88,11 +91,18 @@ def _profile(base: Path, value: Any, where: str, path: Path) -> str:
 def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 20) -> list[RobotJob]:
     """The robots of FLEET.yaml; CheckError naming the file and entry when it is malformed."""
     path = Path(path)
-    data = parse_yaml(read_text_file(path, error=CheckError), path=path, error=CheckError)
+    text = read_text_file(path, error=CheckError)
+    if len(text) > MAX_FLEET_CHARS:  # before parsing: PyYAML takes minutes and gigabytes on tens of megabytes
+        raise CheckError(f"is {len(text) / 1e6:.1f} MB; a fleet file is at most {MAX_FLEET_CHARS / 1e6:g} MB",
+                         path=path, hint=f"split the fleet into files of at most {MAX_ROBOTS} robots")
+    data = parse_yaml(text, path=path, error=CheckError)
     robots = data.get("robots") if isinstance(data, dict) else None
     if not isinstance(robots, list) or not robots:
         raise CheckError("needs a non-empty list 'robots'", path=path, field="robots",
                          hint="robots: [{name: r01, profile: r01.yaml, recording: logs/r01}]")
+    if len(robots) > MAX_ROBOTS:
+        raise CheckError(f"lists {len(robots)} robots; one run checks at most {MAX_ROBOTS}", path=path,
+                         field="robots", hint="split the fleet into several files (one run each)")
     base, jobs, seen = path.parent, [], set[str]()
     for k, entry in enumerate(robots):
         where = f"robots[{k}]"

@@ -168,3 +168,18 @@ def test_a_fleet_output_is_published_whole_or_not_at_all(capsys: pytest.CaptureF
     assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 1
     assert sorted(p.name for p in out.iterdir()) == ["a", "b", "index.html", "summary.json"]
     assert (out / "a" / "check.json").is_file() and not (out / "a" / "check.html").exists()  # failed: no report
+
+
+def test_a_huge_fleet_file_is_refused_before_parsing(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    from s2r.drift import fleet as fleet_module
+
+    path = tmp_path / "fleet.yaml"
+    path.write_text("# padding\n" * (fleet_module.MAX_FLEET_CHARS // 10 + 1) + "robots: []\n")
+    assert main(["fleet", "check", str(path), "-o", str(tmp_path / "o")]) == 2
+    assert "a fleet file is at most" in _err(capsys)
+    monkeypatch.setattr(fleet_module, "MAX_ROBOTS", 3)
+    robots = [{"name": f"r{k}", "profile": "p.yaml", "recording": "r"} for k in range(4)]
+    path.write_text(json.dumps({"robots": robots}))
+    assert main(["fleet", "check", str(path), "-o", str(tmp_path / "o")]) == 2
+    assert "robots: lists 4 robots; one run checks at most 3" in _err(capsys)
