@@ -9,6 +9,7 @@ import argparse
 import contextlib
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -157,6 +158,10 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     settings = _settings(args)
     if args.workers < 1:
         raise CheckError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    cores = os.cpu_count() or 1
+    if args.scheduler is None and args.workers > 4 * cores:  # each is a process holding images: not a queue
+        raise CheckError(f"{args.workers} local worker processes on {cores} cores", field="--workers",
+                         hint=f"at most {4 * cores} here; for more, run a Dask cluster and pass --scheduler")
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
     check_output_dir(args.output, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))

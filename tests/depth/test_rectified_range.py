@@ -67,3 +67,17 @@ def test_a_fixed_range_gives_one_depth_one_colour_in_every_frame() -> None:
     assert not np.array_equal(own[0][40, 50], own[1][40, 50])  # without --range each frame scales itself
     at_near = depth_colour_with_bar(np.full((80, 100), f * B / near_far[0], np.float32), Q, near_far)[40, 50]
     assert at_near[2] > 100 and at_near[0] < 50  # JET's near end is red (BGR)
+
+
+def test_a_rectified_sequence_with_a_fixed_range(tmp_path: Path) -> None:
+    root = shared_data("middlebury")
+    for side, name in (("L", "im2.png"), ("R", "im6.png")):
+        (tmp_path / side).mkdir()
+        for k, scene in enumerate(("cones", "teddy")):
+            (tmp_path / side / f"{k:02d}.png").write_bytes((root / scene / name).read_bytes())
+    out = tmp_path / "seq"
+    assert main(["-q", "depth", "--left-dir", str(tmp_path / "L"), "--right-dir", str(tmp_path / "R"),
+                 "--rectified", *GEOMETRY, "--num-disparities", "64", "--range", "1.5,10", "-o", str(out)]) == 0
+    assert (out / "00_depth_color.png").is_file() and (out / "01_depth_color.png").is_file()
+    bars = [cv2.imread(str(out / f"{k:02d}_depth_color.png"))[:, -110:] for k in range(2)]
+    assert np.array_equal(bars[0], bars[1])  # one scale: the colour bars (and their labels) are the same

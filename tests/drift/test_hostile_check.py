@@ -183,3 +183,12 @@ def test_a_huge_fleet_file_is_refused_before_parsing(capsys: pytest.CaptureFixtu
     path.write_text(json.dumps({"robots": robots}))
     assert main(["fleet", "check", str(path), "-o", str(tmp_path / "o")]) == 2
     assert "robots: lists 4 robots; one run checks at most 3" in _err(capsys)
+
+
+def test_more_local_workers_than_the_machine_holds_is_refused(capsys: pytest.CaptureFixture[str],
+                                                              tmp_path: Path) -> None:
+    fleet = tmp_path / "fleet.yaml"
+    fleet.write_text(json.dumps({"robots": [{"name": "a", "profile": "p.yaml", "recording": "r"}]}))
+    workers = str(4 * (os.cpu_count() or 1) + 1)
+    assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--workers", workers]) == 2
+    assert "--workers:" in _err(capsys) and not (tmp_path / "o").exists()
