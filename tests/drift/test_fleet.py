@@ -39,8 +39,12 @@ def test_fleet_matches_single_checks_and_names_broken_robots(capsys: pytest.Capt
     assert [r["name"] for r in summary["robots"]][:2] == ["broken", "r6"]  # most severe first
     assert rows["broken"]["verdict"] == "failed" and "no_such_folder" in rows["broken"]["reasons"][0]
     assert rows["r6"]["verdict"] == "failed" and "missing_profile.yaml" in rows["r6"]["reasons"][0]
-    for name, recording in (("r1", recordings["same"]), ("r2", recordings["turned"])):
-        assert main(["check", str(drift_rig_file), str(recording), "--json"]) in (0, 1)
+    singles = {"r1": [str(recordings["same"])], "r2": [str(recordings["turned"])],
+               "r3": ["--left", str(recordings["same"] / "left" / "*.png"),
+                      "--right", str(recordings["same"] / "right" / "*.png"), "--max-frames", "2"],
+               "r4": [str(recordings["turned"]), "--max-frames", "2"]}
+    for name, recording in singles.items():
+        assert main(["check", str(drift_rig_file), *recording, "--json"]) in (0, 1)
         single = json.loads(capsys.readouterr().out)
         assert rows[name]["verdict"] == single["verdict"]
         # the same to rounding: BLAS may sum in another order in a single-threaded worker than here
