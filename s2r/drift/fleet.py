@@ -15,7 +15,8 @@ FLEET.yaml::
 
 A robot whose files are broken or missing is reported as ``failed`` with the reason, never fatal; FLEET.yaml
 itself being malformed is bad input (CheckError, exit 2). Tasks run in worker processes (local pool or Dask),
-and return plain data; the parent writes every file.
+and return plain data; the parent writes every file. Paths are made absolute before they are sent: the workers
+of a ``--scheduler`` cluster must see the profiles and recordings at the same paths (a shared file system).
 """
 
 from __future__ import annotations
@@ -103,7 +104,7 @@ def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 2
     if len(robots) > MAX_ROBOTS:
         raise CheckError(f"lists {len(robots)} robots; one run checks at most {MAX_ROBOTS}", path=path,
                          field="robots", hint="split the fleet into several files (one run each)")
-    base, jobs, seen = path.parent, [], set[str]()
+    base, jobs, seen = path.absolute().parent, [], set[str]()  # absolute: workers of a --scheduler have another cwd
     for k, entry in enumerate(robots):
         where = f"robots[{k}]"
         if not isinstance(entry, dict) or not {"name", "profile", "recording"} <= entry.keys():

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import time
+from pathlib import Path
 
 import psutil
+import pytest
 
+from s2r.cli import main
 from s2r.executor import open_runner
 
 
@@ -40,3 +44,19 @@ def test_a_local_dask_cluster_listens_on_loopback_only_and_leaves_nothing() -> N
         alive = [p for p in alive if _worker_alive(p)]
         time.sleep(0.2)
     assert not alive, [p.cmdline() for p in alive]
+
+
+def test_fleet_check_runs_on_a_running_scheduler(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """--scheduler ADDRESS: the robots go to an existing cluster (here one started for the test, on loopback)."""
+    from distributed import LocalCluster
+
+    fleet = tmp_path / "fleet.yaml"
+    fleet.write_text(json.dumps({"robots": [{"name": n, "profile": "missing.yaml", "recording": "r"}
+                                            for n in ("a", "b", "c")]}))
+    with LocalCluster(n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+                      silence_logs=40, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        code = main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--json",
+                     "--scheduler", cluster.scheduler_address])
+    summary = json.loads(capsys.readouterr().out)
+    assert code == 1 and summary["counts"]["failed"] == 3
+    assert all(str(tmp_path / "missing.yaml") in r["reasons"][0] for r in summary["robots"])

@@ -192,3 +192,20 @@ def test_more_local_workers_than_the_machine_holds_is_refused(capsys: pytest.Cap
     workers = str(4 * (os.cpu_count() or 1) + 1)
     assert main(["fleet", "check", str(fleet), "-o", str(tmp_path / "o"), "--workers", workers]) == 2
     assert "--workers:" in _err(capsys) and not (tmp_path / "o").exists()
+
+
+def test_fleet_paths_are_sent_absolute(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A remote scheduler's workers run elsewhere: a FLEET.yaml given by a relative path still sends absolute
+    paths."""
+    from s2r.drift.check import CheckSettings
+    from s2r.drift.fleet import load_fleet
+
+    (tmp_path / "site").mkdir()
+    (tmp_path / "site" / "fleet.yaml").write_text(json.dumps({"robots": [
+        {"name": "a", "profile": "a.yaml", "recording": "logs/a"},
+        {"name": "b", "profile": "a.yaml", "recording": {"left": "l/*.png", "right": "r/*.png"}}]}))
+    monkeypatch.chdir(tmp_path)
+    jobs = load_fleet(Path("site/fleet.yaml"), settings=CheckSettings())
+    assert jobs[0].profile == str(tmp_path / "site" / "a.yaml")
+    assert jobs[0].source.folder == tmp_path / "site" / "logs" / "a"
+    assert jobs[1].source.left_glob == str(tmp_path / "site" / "l" / "*.png")
