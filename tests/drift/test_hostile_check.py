@@ -209,3 +209,14 @@ def test_fleet_paths_are_sent_absolute(tmp_path: Path, monkeypatch: pytest.Monke
     assert jobs[0].profile == str(tmp_path / "site" / "a.yaml")
     assert jobs[0].source.folder == tmp_path / "site" / "logs" / "a"
     assert jobs[1].source.left_glob == str(tmp_path / "site" / "l" / "*.png")
+
+
+def test_a_mistyped_option_of_a_command_gets_did_you_mean(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main(["check", "rig.yaml", "logs", "--tolernce", "0.1"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("unrecognized arguments: --tolernce 0.1 (did you mean --tolerance?)")
+    with pytest.raises(SystemExit):
+        main(["fleet", "check", "f.yaml", "-o", "o", "--schedular", "tcp://h:1"])
+    assert "(did you mean --scheduler?)" in capsys.readouterr().err
