@@ -120,10 +120,11 @@ def _sample(image: NDArray[np.uint8], coords: F) -> NDArray[np.uint8]:
 
 
 def render_pair(left: Cam, right: Cam, R: F, T: F, dR: F, *, seed: int, plane_depth_m: float = 1.5,
-                plane_box: tuple[float, float, float, float] = (0.15, 0.5, 0.75, 0.95)
+                plane_box: tuple[float, float, float, float] = (0.15, 0.5, 0.75, 0.95), about_centre: bool = True
                 ) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
     """Raw grey (left, right) images of the backdrop + a near plane covering ``plane_box`` (x0, y0, x1, y1 as
-    fractions of the virtual left image), through a rig really at ``dR @ R``, ``dR @ T``."""
+    fractions of the virtual left image), through a rig really at ``dR @ R``, ``dR @ T`` (the right camera
+    turned about its own centre) or, with ``about_centre`` False, ``dR @ R``, ``T``."""
     rng = np.random.default_rng(seed)
     scale = 1.5  # the virtual image is wider than the cameras so that every ray lands on the texture
     Wv, Hv = int(left.w * scale), int(left.h * scale)
@@ -132,7 +133,8 @@ def render_pair(left: Cam, right: Cam, R: F, T: F, dR: F, *, seed: int, plane_de
     backdrop, near_tex = photo_texture(Hv, Wv, rng), photo_texture(Hv, Wv, rng)
     x0, y0, x1, y1 = plane_box
     images = []
-    for cam, Rc, Tc in ((left, np.eye(3), np.zeros(3)), (right, dR @ R, dR @ np.asarray(T, float).reshape(3))):
+    T_true = (dR if about_centre else np.eye(3)) @ np.asarray(T, float).reshape(3)
+    for cam, Rc, Tc in ((left, np.eye(3), np.zeros(3)), (right, dR @ R, T_true)):
         far, near, s = _maps(cam, Rc, Tc, K_virtual, plane_depth_m)
         inside = (near[..., 0] >= x0 * Wv) & (near[..., 0] < x1 * Wv) & (near[..., 1] >= y0 * Hv) \
             & (near[..., 1] < y1 * Hv) & (s > 0)
