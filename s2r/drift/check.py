@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from s2r.drift.matches import FrameMatches, match_frame
 from s2r.drift.model import MODELS, fit_rotation, predict_right, robust_scale
+from s2r.drift.turned import Turn, side_by_side_turn
 from s2r.errors import CheckError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
@@ -206,7 +207,8 @@ def _cannot_tell(matches: int, frames: list[FrameMatches], settings: CheckSettin
 
 
 def _verdict(omega_deg: FloatArray, sigma_deg: FloatArray, matches: int, frames: list[FrameMatches],
-             settings: CheckSettings) -> tuple[str, list[str]]:
+             settings: CheckSettings, *, weak: int = 1) -> tuple[str, list[str]]:
+    """Verdict and reasons; ``weak`` is the axis (index into :data:`AXES`) that may stay unresolved."""
     tol = np.asarray(settings.tolerance_deg)
     if matches < settings.min_matches or not np.all(np.isfinite(omega_deg)) or _looks_swapped(matches, frames,
                                                                                                settings):
@@ -217,14 +219,14 @@ def _verdict(omega_deg: FloatArray, sigma_deg: FloatArray, matches: int, frames:
     if drifted:
         return "drifted", drifted
     unresolved = [f"{a}: sigma {s:.3f} deg is over half the {t:g} deg tolerance" for a, s, t in
-                  zip(AXES, sigma_deg, tol, strict=True) if s > t / 2.0 and a != "yaw"]
+                  zip(AXES, sigma_deg, tol, strict=True) if s > t / 2.0 and a != AXES[weak]]
     if unresolved:
         return "cannot tell", [*unresolved, "more frames with texture across the whole image narrow it"]
     judged = [(a, t) for a, s, t in zip(AXES, sigma_deg, tol, strict=True) if s <= t / 2.0]
     reasons = [f"{', '.join(a for a, _ in judged)} within tolerance ({', '.join(f'{t:g}' for _, t in judged)} deg)"]
-    if sigma_deg[1] > tol[1] / 2.0:  # yaw alone may stay unresolved: it is the p2 pattern of a real lens
-        reasons.append(f"yaw not resolved (sigma {sigma_deg[1]:.3f} deg): on a lens with distortion it looks like "
-                       "a tangential-distortion error; it scales depth, which only a target can check")
+    if sigma_deg[weak] > tol[weak] / 2.0:  # yaw alone may stay unresolved: it is the p2 pattern of a real lens
+        reasons.append(f"{AXES[weak]} not resolved (sigma {sigma_deg[weak]:.3f} deg): on a lens with distortion it "
+                       "looks like a tangential-distortion error; it scales depth, which only a target can check")
     return "good", reasons
 
 
@@ -242,23 +244,28 @@ def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
                 total: int | None = None) -> DriftResult:
     """Check ``profile`` against raw grey stereo pairs ``(name, left, right)`` of ordinary scenes."""
     rect = stereo_rectification(profile)
-    if abs(rect.P2[1, 3]) > abs(rect.P2[0, 3]):  # OpenCV rectified it top-bottom: epipolar lines are columns
-        raise CheckError("the baseline is vertical (one camera above the other); s2r check measures the vertical "
-                         "disparity of side-by-side rigs only", path=profile.name, field="extrinsics.translation_m",
-                         hint="turn the images and the profile by 90 degrees so the cameras sit side by side")
+    turn = None
+    if abs(rect.P2[1, 3]) > abs(rect.P2[0, 3]):  # OpenCV rectified it top-bottom: check it turned side by side
+        turn = side_by_side_turn(profile)
+        rect = stereo_rectification(turn.profile)
+    working = profile if turn is None else turn.profile
     frames: list[FrameMatches] = []
     for k, (name, left, right) in enumerate(pairs, start=1):
         check_image_sizes(profile, name, left, right)
-        frames.append(match_frame(profile, rect, left, right, name=name))
+        if turn is not None:
+            left, right = turn.image(left), turn.image(right)
+        frames.append(match_frame(working, rect, left, right, name=name))
         report(progress, k, total or k, "matching features")
     left_px = np.vstack([f.left for f in frames]) if frames else np.zeros((0, 2))
     right_px = np.vstack([f.right for f in frames]) if frames else np.zeros((0, 2))
     frame_of = np.concatenate([np.full(f.count, k) for k, f in enumerate(frames)]) if frames else np.zeros(0, int)
-    return _summarise(profile, rect, frames, left_px, right_px, frame_of, settings)
+    return _summarise(working, rect, frames, left_px, right_px, frame_of, settings, turn)
 
 
 def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], left: FloatArray, right: FloatArray,
-               frame_of: NDArray[np.int_], settings: CheckSettings) -> DriftResult:
+               frame_of: NDArray[np.int_], settings: CheckSettings, turn: Turn | None = None) -> DriftResult:
+    """The fit, sigma, costs and verdict of the matches; with ``turn`` (a vertical rig checked turned) the
+    rotation and its sigmas are given in the profile's own camera axes."""
     n = len(left)
     if n < max(10, settings.min_matches // 2):  # not estimated: NaN, never a confident zero
         omega, cov, spread = np.full(3, np.nan), np.full((3, 3), np.nan), np.full(3, np.nan)
@@ -276,8 +283,15 @@ def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], le
     residual = right[:, 1] - predict_right(profile, rect, left, left[:, 0] - right[:, 0] + rect.doffs_px, omega,
                                            model="centre")[:, 1] if n else np.zeros(0)
     vertical, costs = _costs(profile, rect, omega, sigma, settings.distances_m)
+    weak = 1  # the axis a lens's p2 term mimics: yaw, or the profile's own axis that turned into yaw
+    if turn is not None:
+        omega, spread = turn.back(omega), turn.back_sigma(spread)
+        sigma, formal = turn.back_sigma(sigma), turn.back_sigma(formal)
+        resampled = None if resampled is None else turn.back_sigma(resampled)
+        weak = int(np.argmax(np.abs(turn.M[1])))
+        source += "; vertical rig: fitted with images and profile turned 90 deg, given in the profile's axes"
     omega_deg, sigma_deg = np.degrees(omega), np.degrees(sigma)
-    verdict, reasons = _verdict(omega_deg, sigma_deg, n, frames, settings)
+    verdict, reasons = _verdict(omega_deg, sigma_deg, n, frames, settings, weak=weak)
     return DriftResult(
         profile=profile.name, verdict=verdict, reasons=reasons, omega_deg=omega_deg, sigma_deg=sigma_deg,
         sigma_formal_deg=np.degrees(formal), sigma_resampled_deg=None if resampled is None else np.degrees(resampled),

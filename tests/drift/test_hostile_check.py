@@ -139,18 +139,27 @@ def test_a_scheduler_that_never_answers_fails_fast(capsys: pytest.CaptureFixture
     assert not (tmp_path / "o").exists()
 
 
-def test_a_vertical_rig_is_refused_in_one_line(capsys: pytest.CaptureFixture[str], base: Path,
-                                               tmp_path: Path) -> None:
+@pytest.mark.parametrize("below", [True, False])
+def test_a_vertical_rig_is_checked_turned_on_its_side(below: bool) -> None:
+    """One camera above the other: checked with images and profile turned by 90 degrees, the rotation given in
+    the profile's own axes (here 0.3 deg of pitch, about the axis the turned check calls yaw)."""
+    from s2r.drift.check import check_drift
     from s2r.profile import Extrinsics
 
-    profile = small_rig()
-    T = -profile.R @ np.array([0.0, 0.08, 0.0])  # the right camera 8 cm below the left
+    profile = make_rig(name="vertical_rig", width=400, height=300, hfov_rad=1.1, baseline_m=0.08,
+                       rotation_deg=(0.2, -0.3, 0.1), origin="real")
+    T = -profile.R @ np.array([0.0, 0.08 if below else -0.08, 0.0])
     vertical = profile.model_copy(update={"extrinsics": Extrinsics(
         rotation=tuple(map(tuple, profile.R.tolist())), translation_m=tuple(T.tolist()))})  # type: ignore[arg-type]
-    dump_profile(vertical, tmp_path / "vertical.yaml")
-    assert main(["check", str(tmp_path / "vertical.yaml"), str(base / "rec")]) == 2
-    err = _err(capsys)
-    assert "extrinsics.translation_m: the baseline is vertical" in err
+    c = vertical.left
+    cam = Cam(c.width_px, c.height_px, c.fx_px, c.fy_px, c.cx_px, c.cy_px)
+    turn = (0.0, 0.0, 0.3)
+    pairs = [(f"{k:02d}", *render_pair(cam, cam, vertical.R, T, rotvec_matrix(np.radians(turn)), seed=9 + k))
+             for k in range(2)]
+    result = check_drift(vertical, pairs)
+    assert result.verdict == "drifted" and "vertical rig" in result.sigma_source
+    for got, truth in zip(result.omega_deg, turn, strict=True):
+        assert abs(got - truth) <= max(0.03, 0.1 * abs(truth)), result.omega_deg
 
 
 def test_a_fleet_output_is_published_whole_or_not_at_all(capsys: pytest.CaptureFixture[str], base: Path,
