@@ -38,6 +38,8 @@ ResultT = TypeVar("ResultT")
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 _WATCHDOG_PERIOD_S = 1.0
+#: How long a Dask scheduler may take to answer (s): connect and handshake together, a hard deadline.
+SCHEDULER_DEADLINE_S = 6.0
 
 
 def _die_with_parent(parent_pid: int) -> None:
@@ -147,12 +149,67 @@ def _dask_client(*, workers: int, scheduler: str | None) -> tuple[Any, Any]:
         raise S2RError("Dask's distributed is not installed", field="--scheduler",
                        hint="pip install 'distributed' (make installs it)") from None
     if scheduler is not None:
-        try:
-            return Client(scheduler, timeout="10s"), None  # type: ignore[no-untyped-call]
-        except (OSError, TimeoutError) as exc:
-            raise S2RError(f"cannot reach the Dask scheduler: {exc}", path=scheduler, field="--scheduler",
-                           hint="start one (dask scheduler) or drop --scheduler for a local cluster") from None
-    cluster = LocalCluster(  # type: ignore[no-untyped-call]
-        n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-        silence_logs=40)
+        return _connect(Client, scheduler), None
+    try:
+        cluster = _local_cluster(LocalCluster, workers)
+    except Exception as exc:  # e.g. a script without a main guard, whose spawned workers cannot start
+        raise S2RError(f"could not start a local Dask cluster of {workers} workers: {type(exc).__name__}: "
+                       f"{' '.join(str(exc).split())[:200]}", field="--workers",
+                       hint="fewer --workers, or a running scheduler with --scheduler; a script calling s2r needs "
+                       "an `if __name__ == \"__main__\":` guard") from None
     return Client(cluster), cluster  # type: ignore[no-untyped-call]
+
+
+def _local_cluster(cluster_type: Any, workers: int) -> Any:
+    """Dask's LocalCluster of ``workers`` single-threaded processes, every socket on loopback, no dashboard."""
+    return cluster_type(  # type: ignore[no-untyped-call]
+        n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        silence_logs=40, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})  # its http server: loopback
+
+
+def _unreachable(scheduler: str, why: str) -> S2RError:
+    return S2RError(f"cannot reach the Dask scheduler: {' '.join(why.split())[:200]}", path=scheduler,
+                    field="--scheduler", hint="give tcp://HOST:PORT of a running scheduler (dask scheduler), or drop "
+                    "--scheduler for a local cluster")
+
+
+def _connect(client_type: Any, scheduler: str) -> Any:
+    """A ``Client`` of ``scheduler`` within :data:`SCHEDULER_DEADLINE_S`, else S2RError naming --scheduler.
+
+    Dask's own connect timeout does not cover the handshake (a port that accepts and never answers holds it for
+    ``distributed.comm.timeouts.tcp``, 30 s), nor garbage answers: the connect runs in a daemon thread that is
+    abandoned (its client closed if it ever connects) at the deadline, and any failure is named as one line.
+    """
+    from distributed.comm.addressing import parse_address
+    from distributed.comm.registry import get_backend
+
+    try:
+        get_backend(parse_address(scheduler, strict=True)[0])
+    except ValueError as exc:
+        raise _unreachable(scheduler, f"not an address ({exc})") from None
+    outcome: dict[str, Any] = {}
+    lock = threading.Lock()
+
+    def connect() -> None:
+        try:
+            client = client_type(scheduler, timeout=f"{SCHEDULER_DEADLINE_S}s")
+        except BaseException as exc:  # any failure (even a MemoryError from a garbage answer) is data
+            outcome["error"] = exc
+            return
+        with lock:
+            abandoned = outcome.setdefault("client", client) is not client  # the caller gave up already
+        if abandoned:
+            with contextlib.suppress(Exception):
+                client.close()
+
+    thread = threading.Thread(target=connect, name="s2r-dask-connect", daemon=True)
+    thread.start()
+    thread.join(SCHEDULER_DEADLINE_S)
+    with lock:
+        client = outcome.setdefault("client", None)
+    if client is not None:
+        return client
+    error = outcome.get("error")
+    if error is None:
+        raise _unreachable(scheduler, f"no answer within {SCHEDULER_DEADLINE_S:g} s")
+    raise _unreachable(scheduler, f"{type(error).__name__}: {error}")

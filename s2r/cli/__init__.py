@@ -68,6 +68,24 @@ class _Parser(argparse.ArgumentParser):
             optional = {a.metavar or a.dest for a in self._actions if not a.option_strings and a.nargs in ("*", "?")}
             names = [n.strip() for n in message.split(":", 1)[1].split(",")]
             return "the following arguments are required: " + ", ".join(n for n in names if n not in optional)
+        if message.startswith("unrecognized arguments:"):
+            return self._unrecognized(message)
+        return message
+
+    def _unrecognized(self, message: str) -> str:
+        """argparse's "unrecognized arguments" with "did you mean" from the options of the command given."""
+        parser: argparse.ArgumentParser = self
+        for token in type(self).argv:  # walk down to the (sub)command the line names
+            chosen = next((a.choices[token] for a in parser._actions
+                           if isinstance(a, argparse._SubParsersAction) and token in a.choices), None)
+            if chosen is not None:
+                parser = chosen
+        known = [s for a in parser._actions for s in a.option_strings]
+        for token in message.split(":", 1)[1].split():
+            close = difflib.get_close_matches(token.split("=", 1)[0], known, n=1, cutoff=0.6) \
+                if token.startswith("--") else []
+            if close:
+                return f"{message} (did you mean {close[0]}?)"
         return message
 
     def _unknown_options(self) -> str:

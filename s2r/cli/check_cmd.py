@@ -6,7 +6,10 @@ Exit codes: 0 good (every robot good), 1 drifted or cannot tell (any robot not g
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -87,7 +90,7 @@ def _source(args: argparse.Namespace) -> Any:
 
 def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.check import check_drift
-    from s2r.drift.source import read_pairs
+    from s2r.drift.source import profile_sizes, read_pairs
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
     if args.fix != (args.output is not None):
@@ -99,7 +102,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     if args.report is not None:
         prepare_output_dir(args.report, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))
-    result = check_drift(profile, read_pairs(source), settings=settings, progress=bar, total=source.max_frames)
+    pairs = read_pairs(source, sizes=profile_sizes(profile))
+    result = check_drift(profile, pairs, settings=settings, progress=bar, total=source.max_frames)
     if args.json:
         print_json(result.as_dict())
     else:
@@ -133,8 +137,11 @@ def _summary(result: Any) -> list[str]:
     lines = [f"{result.profile}: {result.verdict.upper()} - {'; '.join(result.reasons)}",
              f"  {result.matches} matches in {len(result.frames)} frames, robust residual {result.residual_px:.3f} px",
              "  rotation error of the right camera (deg, about its optical axes; R_true = dR R_profile):"]
-    lines += [f"    {a:<6}{o:+.4f} +/- {s:.4f}  (tolerance {t:g})" for a, o, s, t in
+    lines += [f"    {a:<6}{o:+.4f} +/- {s:.4f}  (tolerance {t:g})" if math.isfinite(o) else
+              f"    {a:<6}not estimated  (tolerance {t:g})" for a, o, s, t in
               zip(AXES, result.omega_deg, result.sigma_deg, result.tolerance_deg, strict=True)]
+    if not all(math.isfinite(o) for o in result.omega_deg):
+        return [*lines, f"  {BLIND_SPOTS}"]
     v = result.vertical_px
     lines.append(f"  rows of mismatch it leaves: median {v['median']:.2f} px, p95 {v['p95']:.2f} px")
     lines.append("  depth bias at the centre (from yaw): " + ", ".join(
@@ -151,6 +158,10 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     settings = _settings(args)
     if args.workers < 1:
         raise CheckError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    cores = os.cpu_count() or 1
+    if args.scheduler is None and args.workers > 4 * cores:  # each is a process holding images: not a queue
+        raise CheckError(f"{args.workers} local worker processes on {cores} cores", field="--workers",
+                         hint=f"at most {4 * cores} here; for more, run a Dask cluster and pass --scheduler")
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
     check_output_dir(args.output, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))
@@ -173,18 +184,44 @@ def _counts(rows: list[dict[str, Any]]) -> dict[str, int]:
 
 
 def _write_fleet(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
-    """DIR/index.html, DIR/summary.json and each robot's DIR/NAME/check.html + check.json."""
+    """DIR/index.html, DIR/summary.json and each robot's DIR/NAME/check.html + check.json, published whole or not
+    at all (one :class:`~s2r.fileio.OutputBatch`: a write error leaves none of them)."""
     from s2r.drift.report import fleet_report_html
-    from s2r.fileio import atomic_write_text, prepare_output_dir
+    from s2r.fileio import OutputBatch, prepare_output_dir
 
     out = prepare_output_dir(args.output, force=args.force)
-    for r in rows:
-        data = {k: v for k, v in r.items() if k != "html"}
-        folder = prepare_output_dir(out / r["name"], force=True)
-        if r.get("html"):
-            atomic_write_text(folder / "check.html", r["html"], force=args.force)
-            r["report"] = f"{r['name']}/check.html"
-        atomic_write_text(folder / "check.json", json.dumps(to_jsonable(data), indent=2), force=args.force)
-    summary = {"robots": [{k: v for k, v in r.items() if k != "html"} for r in rows], "counts": _counts(rows)}
-    atomic_write_text(out / "summary.json", json.dumps(to_jsonable(summary), indent=2), force=args.force)
-    atomic_write_text(out / "index.html", fleet_report_html(rows, fleet_file=args.fleet_file), force=args.force)
+    created: list[Path] = []
+    try:
+        with OutputBatch(force=args.force, root=out) as batch:
+            for r in rows:
+                data = {k: v for k, v in r.items() if k != "html"}
+                folder = _robot_folder(out / r["name"], created)
+                if r.get("html"):
+                    batch.add_text(folder / "check.html", r["html"])
+                    r["report"] = f"{r['name']}/check.html"
+                batch.add_text(folder / "check.json", json.dumps(to_jsonable(data), indent=2))
+            summary = {"robots": [{k: v for k, v in r.items() if k != "html"} for r in rows],
+                       "counts": _counts(rows)}
+            batch.add_text(out / "summary.json", json.dumps(to_jsonable(summary), indent=2))
+            batch.add_text(out / "index.html", fleet_report_html(rows, fleet_file=args.fleet_file))
+            batch.publish()
+    except BaseException:
+        for folder in reversed(created):  # nothing half-published: the folders made for it go too
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        raise
+
+
+def _robot_folder(folder: Path, created: list[Path]) -> Path:
+    """``folder`` as a real folder (made now and noted in ``created``, or already one with --force)."""
+    try:
+        folder.mkdir()
+        created.append(folder)
+    except FileExistsError:
+        if folder.is_symlink() or not folder.is_dir():
+            raise CheckError("is in the way of a robot's report folder (a file or a link); nothing was written",
+                             path=folder, hint="remove it, or choose another output folder") from None
+    except OSError as exc:
+        raise CheckError(f"cannot create folder: {exc.strerror}", path=folder,
+                         hint="choose a writable location") from None
+    return folder

@@ -53,6 +53,18 @@ def register(sub: Any) -> None:
     parser.add_argument("--ply", action="store_true", help="also write a coloured point cloud (points.ply)")
     parser.add_argument("--keep-out-of-range", action="store_true",
                         help="keep depths outside the profile's min_depth_m..max_depth_m (default: invalid, 0)")
+    parser.add_argument("--range", metavar="NEAR,FAR", dest="colour_range",
+                        help="fixed colour scale of depth_color.png in metres (the same colour is the same depth in "
+                        "every frame of a sequence); default each map's own range")
+    given = parser.add_argument_group("already-rectified pairs (Middlebury, rectified topics): no --profile")
+    given.add_argument("--rectified", action="store_true",
+                       help="the pairs are rectified already: give --f, --baseline, --cx, --cy (and --doffs)")
+    given.add_argument("--f", type=float, metavar="PX", help="--rectified: focal length, pixels")
+    given.add_argument("--baseline", type=float, metavar="M", help="--rectified: baseline, metres")
+    given.add_argument("--cx", type=float, metavar="PX", help="--rectified: left principal point x, pixels")
+    given.add_argument("--cy", type=float, metavar="PX", help="--rectified: principal point y, pixels")
+    given.add_argument("--doffs", type=float, default=0.0, metavar="PX",
+                       help="--rectified: right cx minus left cx, pixels (Middlebury's doffs; default 0)")
     parser.add_argument("--left-dir", type=Path, help="folder of left images (sequence mode)")
     parser.add_argument("--right-dir", type=Path, help="folder of right images, paired by sorted names")
     parser.add_argument("--workers", type=int, default=2, help="compute threads in sequence mode (default 2)")
@@ -67,10 +79,34 @@ def _pipeline(args: argparse.Namespace) -> StereoPipeline:
     from s2r.registry import load_profile
 
     post = None if args.postprocess is None else check_stages(args.postprocess)
+    if args.rectified:
+        return StereoPipeline(_given_profile(args), preset=args.preset, num_disparities=args.num_disparities,
+                              postprocess=post, rectified=True)
     profile = load_profile(args.profile)
     check_side_by_side(profile, path=args.profile or "$S2R_PROFILE")  # name the file of a vertical rig
     return StereoPipeline(profile, preset=args.preset, alpha=args.alpha, num_disparities=args.num_disparities,
                           postprocess=post, resize=args.resize, fov_deg=args.fov)
+
+
+def _given_profile(args: argparse.Namespace) -> Any:
+    """--rectified: the profile of the pairs' geometry, at the size of the first left image."""
+    from s2r.depth.outputs import read_image
+    from s2r.depth.prerectified import rectified_profile
+    from s2r.depth.sequence import pair_images
+
+    missing = [o for o, v in (("--f", args.f), ("--baseline", args.baseline), ("--cx", args.cx), ("--cy", args.cy))
+               if v is None]
+    if missing:
+        raise DepthError(f"needs {', '.join(missing)}", field="--rectified",
+                         hint="e.g. --rectified --f 3740 --baseline 0.16 --cx 224.5 --cy 187 (Middlebury's calib.txt)")
+    for option, given in (("--profile", args.profile), ("--resize", args.resize or None), ("--fov", args.fov),
+                          ("--alpha", args.alpha)):
+        if given is not None:
+            raise DepthError("does not apply to already-rectified pairs", field=option, hint=f"drop {option}")
+    first = args.left if args.left is not None else pair_images(args.left_dir, args.right_dir)[0][0]
+    shape = read_image(first).shape
+    return rectified_profile((shape[1], shape[0]), f_px=args.f, baseline_m=args.baseline, cx_px=args.cx,
+                             cy_px=args.cy, doffs_px=args.doffs)
 
 
 def _cmd_depth(args: argparse.Namespace) -> int:
@@ -90,12 +126,27 @@ def _cmd_depth(args: argparse.Namespace) -> int:
         raise DepthError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
     if args.fov is not None and not 10.0 <= args.fov <= 170.0:  # NaN fails too
         raise DepthError(f"must be 10-170 degrees, got {args.fov}", field="--fov", hint="e.g. --fov 90")
+    args.colour_range = _colour_range(args.colour_range)
     pipeline = _pipeline(args)
     if args.fov is not None and pipeline.profile.left.distortion.model != "equidistant":  # was silently ignored
         raise DepthError(f"--fov sets the rectified field of fisheye (equidistant) profiles; {pipeline.profile.name} "
                          f"is {pipeline.profile.left.distortion.model}", field="--fov",
                          hint="drop --fov, or use --alpha to keep more of a pinhole image")
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
+
+
+def _colour_range(text: str | None) -> tuple[float, float] | None:
+    """``NEAR,FAR`` metres, 0 < NEAR < FAR, both finite; DepthError naming --range otherwise."""
+    if text is None:
+        return None
+    try:
+        near, far = (float(v) for v in text.split(","))
+    except ValueError:
+        raise DepthError(f"expected NEAR,FAR in metres, got {text!r}", field="--range",
+                         hint="e.g. --range 0.3,5") from None
+    if not (0.0 < near < far < float("inf")):  # NaN fails too
+        raise DepthError(f"needs 0 < NEAR < FAR, got {text!r}", field="--range", hint="e.g. --range 0.3,5")
+    return near, far
 
 
 def _depth_range(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[float, float] | None:
@@ -135,7 +186,7 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
         result, removed = limit_depth_range(result, *depth_range)
     rect = pipeline.geometry_for((left.shape[1], left.shape[0])).rectification
     with OutputBatch(force=args.force, root=args.output) as batch:  # every file, or none
-        written = write_outputs(args.output, result, ply=args.ply, batch=batch)
+        written = write_outputs(args.output, result, ply=args.ply, batch=batch, colour_range_m=args.colour_range)
         written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
                                          "rectified_left", batch=batch))
         batch.publish()
@@ -174,7 +225,8 @@ def _run_sequence(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     depth_range = _depth_range(args, pipeline)
     with OutputBatch(force=args.force, root=args.output) as batch:  # the whole sequence, or nothing
         frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.workers,
-                              progress=bar, depth_range_m=depth_range, batch=batch)
+                              progress=bar, depth_range_m=depth_range, batch=batch,
+                              colour_range_m=args.colour_range)
         # every frame has the profile's size unless --resize: then the camera_info of the first frame's size
         size = pipeline.profile.image_size
         if args.resize and pairs:

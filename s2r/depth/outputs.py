@@ -74,12 +74,14 @@ def depth_to_mm(depth_m: NDArray[np.floating]) -> NDArray[np.uint16]:
     return np.where(valid, np.clip(np.where(valid, mm, 0), 1, 65535), 0).astype(np.uint16)
 
 
-def disparity_colour(disparity: NDArray[np.floating]) -> NDArray[np.uint8]:
-    """(H, W, 3) BGR JET rendering of a disparity map, scaled over its valid range; invalid pixels black."""
+def disparity_colour(disparity: NDArray[np.floating], limits: tuple[float, float] | None = None
+                     ) -> NDArray[np.uint8]:
+    """(H, W, 3) BGR JET rendering of a disparity map, scaled over ``limits`` (low, high disparity px; default its
+    valid range; values beyond are clipped to the end colours); invalid pixels black."""
     valid = np.isfinite(disparity)
     if not valid.any():
         return np.zeros((*disparity.shape, 3), np.uint8)
-    lo, hi = float(np.min(disparity[valid])), float(np.max(disparity[valid]))
+    lo, hi = limits if limits is not None else (float(np.min(disparity[valid])), float(np.max(disparity[valid])))
     scaled = (np.where(valid, disparity, lo) - lo) * (255.0 / max(hi - lo, 1e-6))
     colour = cv2.applyColorMap(np.clip(scaled, 0, 255).astype(np.uint8), cv2.COLORMAP_JET)
     colour[~valid] = 0
@@ -112,13 +114,26 @@ def _colour_bar(height: int, lo: float, hi: float, Q: NDArray[np.float64], *, wi
     return panel
 
 
-def depth_colour_with_bar(disparity: NDArray[np.floating], Q: NDArray[np.float64]) -> NDArray[np.uint8]:
-    """:func:`disparity_colour` with a colour bar on the right giving the near and far depth in metres (via ``Q``)."""
-    image = disparity_colour(disparity)
+def _disparity_of_depth(Q: NDArray[np.float64], depth_m: float) -> float:
+    """Disparity (pixels) of a depth (metres), the inverse of :func:`_depth_of_disparity`."""
+    return (float(Q[2, 3]) / depth_m - float(Q[3, 3])) / float(Q[3, 2])
+
+
+def depth_colour_with_bar(disparity: NDArray[np.floating], Q: NDArray[np.float64],
+                          colour_range_m: tuple[float, float] | None = None) -> NDArray[np.uint8]:
+    """:func:`disparity_colour` with a colour bar on the right giving the near and far depth in metres (via ``Q``).
+
+    ``colour_range_m`` ``(near, far)``: a fixed colour scale (the same colour means the same depth in every frame
+    of a sequence); default each map's own valid range.
+    """
     valid = np.isfinite(disparity)
-    if not valid.any():
-        return image
-    lo, hi = float(np.min(disparity[valid])), float(np.max(disparity[valid]))
+    if colour_range_m is not None:
+        lo, hi = _disparity_of_depth(Q, colour_range_m[1]), _disparity_of_depth(Q, colour_range_m[0])
+    elif valid.any():
+        lo, hi = float(np.min(disparity[valid])), float(np.max(disparity[valid]))
+    else:
+        return disparity_colour(disparity)
+    image = disparity_colour(disparity, (lo, hi))
     return np.ascontiguousarray(np.hstack([image, _colour_bar(image.shape[0], lo, hi, Q)]))
 
 
@@ -192,16 +207,18 @@ def ply_bytes(points: NDArray[np.float32], colours: NDArray[np.uint8]) -> bytes:
 
 def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", ply: bool = False,
                   force: bool = False, depth_range_m: tuple[float, float] | None = None,
-                  batch: OutputBatch | None = None) -> list[Path]:
+                  batch: OutputBatch | None = None, colour_range_m: tuple[float, float] | None = None) -> list[Path]:
     """Write ``{prefix}disparity.npy``, ``depth.png``, ``depth_color.png`` (and ``points.ply``) into ``folder``,
     published together or not at all (staged in ``batch`` when given: a sequence publishes every frame at once).
 
     ``depth_range_m`` ``(near, far)``: depths outside it are written as invalid (see :func:`limit_depth_range`).
+    ``colour_range_m`` ``(near, far)``: the fixed colour scale of ``depth_color.png`` (default: each map's own).
     """
     folder = Path(folder)
     if batch is None:
         with OutputBatch(force=force, root=folder) as own:
-            written = write_outputs(folder, result, prefix=prefix, ply=ply, depth_range_m=depth_range_m, batch=own)
+            written = write_outputs(folder, result, prefix=prefix, ply=ply, depth_range_m=depth_range_m, batch=own,
+                                    colour_range_m=colour_range_m)
             own.publish()
         return written
     if depth_range_m is not None:
@@ -211,7 +228,8 @@ def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", 
     written = [
         batch.add_bytes(folder / f"{prefix}disparity.npy", npy_bytes(np.asarray(result.disparity, np.float32))),
         batch.add_bytes(depth_path, _png_bytes(depth_to_mm(result.depth), depth_path)),
-        batch.add_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q), colour_path)),
+        batch.add_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q, colour_range_m),
+                                               colour_path)),
     ]
     if ply:
         written.append(batch.add_bytes(folder / f"{prefix}points.ply", ply_bytes(*result.point_cloud())))

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.depth import postprocess as pp
+from s2r.depth.prerectified import given_rectification
 from s2r.depth.presets import (
     DEFAULT_POSTPROCESS,
     PRESETS,
@@ -97,6 +98,8 @@ class StereoPipeline:
             size mismatch is a :class:`DepthError`.
         fov_deg: fisheye (equidistant) profiles: horizontal field of view of the rectified images, degrees;
             None: OpenCV's balance ``alpha``, capped at ``s2r.rectification.DEFAULT_FISHEYE_FOV_DEG``.
+        rectified: the pairs are already rectified and ``profile`` is their
+            :func:`s2r.depth.prerectified.rectified_profile`: no resampling, the geometry taken as given.
 
     ``compute`` may be called from several threads at once (each thread gets its own OpenCV matcher).
     """
@@ -111,6 +114,7 @@ class StereoPipeline:
         postprocess: Sequence[str] | None = None,
         resize: bool = False,
         fov_deg: float | None = None,
+        rectified: bool = False,
     ) -> None:
         if preset not in PRESETS:
             raise DepthError(f"unknown preset {preset!r}", field="preset", hint=f"choose one of {', '.join(PRESETS)}")
@@ -122,6 +126,7 @@ class StereoPipeline:
             DEFAULT_POSTPROCESS[preset] if postprocess is None else postprocess)
         self.resize = resize
         self.fov_deg = fov_deg
+        self.rectified = rectified
         self._lock = threading.Lock()
         self._local = threading.local()
         base = self._build(self.profile)
@@ -131,7 +136,8 @@ class StereoPipeline:
         self.config: MatcherConfig = base.config
 
     def _build(self, profile: StereoProfile) -> _Geometry:
-        rect = stereo_rectification(profile, alpha=self.alpha, fov_deg=self.fov_deg)
+        rect = given_rectification(profile) if self.rectified else stereo_rectification(
+            profile, alpha=self.alpha, fov_deg=self.fov_deg)
         check_side_by_side(profile, rect)
         config = resolve_preset(self.preset, profile, fx_px=rect.fx_px, baseline_m=rect.baseline_m,
                                 num_disparities=self.num_disparities)

@@ -58,9 +58,11 @@ def run_sequence(
     progress: ProgressCallback | None = None,
     depth_range_m: tuple[float, float] | None = None,
     batch: OutputBatch | None = None,
+    colour_range_m: tuple[float, float] | None = None,
 ) -> int:
     """Compute and write ``NN_disparity.npy``, ``NN_depth.png``, ``NN_depth_color.png`` (``NN_points.ply``)
-    for every pair, in order (depths outside ``depth_range_m`` invalid); returns the number of frames written.
+    for every pair, in order (depths outside ``depth_range_m`` invalid; ``colour_range_m`` (near, far) m fixes
+    the colour scale of every frame); returns the number of frames written.
     Errors (unreadable image, size mismatch)
     propagate from the frame that failed; frames not yet started are cancelled. With ``batch`` every frame is
     staged there (the caller publishes the whole sequence); without, each frame's files are published alone."""
@@ -77,7 +79,8 @@ def run_sequence(
             computed = computer.submit(_compute_after, pipeline, read, left)
             prefix = frame_prefix(index, total)
             pending.append(writer.submit(_write_after(out, computed, prefix, ply=ply, force=force,
-                                                      depth_range_m=depth_range_m, batch=batch)))
+                                                      depth_range_m=depth_range_m, batch=batch,
+                                                      colour_range_m=colour_range_m)))
             while len(pending) > 2 * workers + 2:
                 pending.popleft().result()
                 done += 1
@@ -107,6 +110,7 @@ def _compute_after(pipeline: StereoPipeline, read: Future[Pair], left: Path) -> 
 
 def _write_after(out: Path, computed: Future[DepthResult], prefix: str, *, ply: bool, force: bool,
                  depth_range_m: tuple[float, float] | None = None,
-                 batch: OutputBatch | None = None) -> Callable[[], list[Path]]:
+                 batch: OutputBatch | None = None, colour_range_m: tuple[float, float] | None = None
+                 ) -> Callable[[], list[Path]]:
     return lambda: write_outputs(out, computed.result(), prefix=prefix, ply=ply, force=force,
-                                 depth_range_m=depth_range_m, batch=batch)
+                                 depth_range_m=depth_range_m, batch=batch, colour_range_m=colour_range_m)

@@ -20,11 +20,13 @@ from numpy.typing import NDArray
 
 from s2r.drift.matches import FrameMatches, match_frame
 from s2r.drift.model import MODELS, fit_rotation, predict_right, robust_scale
+from s2r.drift.turned import Turn, side_by_side_turn
+from s2r.errors import CheckError
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 
-__all__ = ["AXES", "BLIND_SPOTS", "CONVENTION", "CheckSettings", "DriftResult", "check_drift"]
+__all__ = ["AXES", "BLIND_SPOTS", "CONVENTION", "CheckSettings", "DriftResult", "check_drift", "check_image_sizes"]
 
 FloatArray = NDArray[np.float64]
 AXES = ("pitch", "yaw", "roll")  # about the right camera's optical x, y, z
@@ -149,6 +151,11 @@ def _costs(profile: StereoProfile, rect: Any, omega: FloatArray, sigma: FloatArr
            ) -> tuple[dict[str, float], list[dict[str, float]]]:
     """Rows of mismatch the rotation causes over the image (px) and its depth bias at the image centre (with
     the sigma that yaw's sigma gives it: an unresolved yaw leaves the depth scale open)."""
+    if not np.all(np.isfinite(omega)):  # not estimated: no cost to state
+        nan = float("nan")
+        return ({"median": nan, "p95": nan, "max": nan},
+                [{"distance_m": z, "depth_error_m": nan, "depth_error_pct": nan, "depth_error_sigma_pct": nan}
+                 for z in distances])
     w, h = rect.image_size
     u, v = np.meshgrid(np.linspace(0, w - 1, 17), np.linspace(0, h - 1, 13))
     grid = np.column_stack([u.ravel(), v.ravel()])
@@ -174,30 +181,62 @@ def _seen_depth(profile: StereoProfile, rect: Any, centre: FloatArray, z: float,
     return rect.fx_px * rect.baseline_m / seen if seen > 0 else float("inf")
 
 
+def _looks_swapped(matches: int, frames: list[FrameMatches], settings: CheckSettings) -> bool:
+    """Many matches lie clearly behind the rig (a quarter or more; a good pair has only stray mismatches there):
+    the left and right images (or cameras) are swapped. Far points stay near zero disparity either way, so a
+    swapped pair of a mostly distant scene still has matches "in front"."""
+    behind = sum(f.behind for f in frames)
+    return behind >= max(settings.min_matches // 2, 0.25 * (matches + behind))
+
+
+def _cannot_tell(matches: int, frames: list[FrameMatches], settings: CheckSettings) -> str:
+    """Why too few matches: identical images, a swapped pair, blur or no texture (one sentence)."""
+    identical = [f.name for f in frames if f.identical]
+    if identical:
+        return (f"left and right are the same image in {len(identical)} of {len(frames)} frames "
+                f"({', '.join(identical[:3])}): the recording holds one camera twice")
+    behind = sum(f.behind for f in frames)
+    if _looks_swapped(matches, frames, settings):
+        return (f"left and right look swapped: {behind} matches lie behind the rig (negative disparity) against "
+                f"{matches} in front; swap the recording's left and right (or the profile's cameras)")
+    why = f"only {matches} usable matches (need {settings.min_matches})"
+    blurred = [f.name for f in frames if f.sharpness < 20.0]
+    if blurred:
+        why += f"; blurred or textureless frames: {', '.join(blurred[:5])}"
+    return why + ": record scenes with texture at several depths, camera still"
+
+
 def _verdict(omega_deg: FloatArray, sigma_deg: FloatArray, matches: int, frames: list[FrameMatches],
-             settings: CheckSettings) -> tuple[str, list[str]]:
+             settings: CheckSettings, *, weak: int = 1) -> tuple[str, list[str]]:
+    """Verdict and reasons; ``weak`` is the axis (index into :data:`AXES`) that may stay unresolved."""
     tol = np.asarray(settings.tolerance_deg)
-    if matches < settings.min_matches:
-        blurred = [f.name for f in frames if f.sharpness < 20.0]
-        why = f"only {matches} usable matches (need {settings.min_matches})"
-        if blurred:
-            why += f"; blurred or textureless frames: {', '.join(blurred[:5])}"
-        return "cannot tell", [why + ": record scenes with texture at several depths, camera still"]
+    if matches < settings.min_matches or not np.all(np.isfinite(omega_deg)) or _looks_swapped(matches, frames,
+                                                                                               settings):
+        return "cannot tell", [_cannot_tell(matches, frames, settings)]
     drifted = [f"{a} {o:+.3f} deg (+/- {s:.3f}) beyond {t:g} deg" for a, o, s, t in
                zip(AXES, omega_deg, sigma_deg, tol, strict=True)
                if abs(o) > t and abs(o) > settings.significance * s]
     if drifted:
         return "drifted", drifted
     unresolved = [f"{a}: sigma {s:.3f} deg is over half the {t:g} deg tolerance" for a, s, t in
-                  zip(AXES, sigma_deg, tol, strict=True) if s > t / 2.0 and a != "yaw"]
+                  zip(AXES, sigma_deg, tol, strict=True) if s > t / 2.0 and a != AXES[weak]]
     if unresolved:
         return "cannot tell", [*unresolved, "more frames with texture across the whole image narrow it"]
     judged = [(a, t) for a, s, t in zip(AXES, sigma_deg, tol, strict=True) if s <= t / 2.0]
     reasons = [f"{', '.join(a for a, _ in judged)} within tolerance ({', '.join(f'{t:g}' for _, t in judged)} deg)"]
-    if sigma_deg[1] > tol[1] / 2.0:  # yaw alone may stay unresolved: it is the p2 pattern of a real lens
-        reasons.append(f"yaw not resolved (sigma {sigma_deg[1]:.3f} deg): on a lens with distortion it looks like "
-                       "a tangential-distortion error; it scales depth, which only a target can check")
+    if sigma_deg[weak] > tol[weak] / 2.0:  # yaw alone may stay unresolved: it is the p2 pattern of a real lens
+        reasons.append(f"{AXES[weak]} not resolved (sigma {sigma_deg[weak]:.3f} deg): on a lens with distortion it "
+                       "looks like a tangential-distortion error; it scales depth, which only a target can check")
     return "good", reasons
+
+
+def check_image_sizes(profile: StereoProfile, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8]) -> None:
+    """CheckError naming frame ``name`` when an image is not the size its camera has in ``profile``."""
+    for side, cam, image in (("left", profile.left, left), ("right", profile.right, right)):
+        if image.shape[:2] != (cam.height_px, cam.width_px):
+            raise CheckError(f"{side} image is {image.shape[1]}x{image.shape[0]} px but the profile "
+                             f"{profile.name!r} has {cam.width_px}x{cam.height_px}", path=name, field="image size",
+                             hint="check the recording with the profile of the camera that took it")
 
 
 def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
@@ -205,22 +244,31 @@ def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
                 total: int | None = None) -> DriftResult:
     """Check ``profile`` against raw grey stereo pairs ``(name, left, right)`` of ordinary scenes."""
     rect = stereo_rectification(profile)
+    turn = None
+    if abs(rect.P2[1, 3]) > abs(rect.P2[0, 3]):  # OpenCV rectified it top-bottom: check it turned side by side
+        turn = side_by_side_turn(profile)
+        rect = stereo_rectification(turn.profile)
+    working = profile if turn is None else turn.profile
     frames: list[FrameMatches] = []
     for k, (name, left, right) in enumerate(pairs, start=1):
-        frames.append(match_frame(profile, rect, left, right, name=name))
+        check_image_sizes(profile, name, left, right)
+        if turn is not None:
+            left, right = turn.image(left), turn.image(right)
+        frames.append(match_frame(working, rect, left, right, name=name))
         report(progress, k, total or k, "matching features")
     left_px = np.vstack([f.left for f in frames]) if frames else np.zeros((0, 2))
     right_px = np.vstack([f.right for f in frames]) if frames else np.zeros((0, 2))
     frame_of = np.concatenate([np.full(f.count, k) for k, f in enumerate(frames)]) if frames else np.zeros(0, int)
-    return _summarise(profile, rect, frames, left_px, right_px, frame_of, settings)
+    return _summarise(working, rect, frames, left_px, right_px, frame_of, settings, turn)
 
 
 def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], left: FloatArray, right: FloatArray,
-               frame_of: NDArray[np.int_], settings: CheckSettings) -> DriftResult:
+               frame_of: NDArray[np.int_], settings: CheckSettings, turn: Turn | None = None) -> DriftResult:
+    """The fit, sigma, costs and verdict of the matches; with ``turn`` (a vertical rig checked turned) the
+    rotation and its sigmas are given in the profile's own camera axes."""
     n = len(left)
-    zero = np.zeros(3)
-    if n < max(10, settings.min_matches // 2):
-        omega, cov, spread = zero, np.full((3, 3), np.nan), zero
+    if n < max(10, settings.min_matches // 2):  # not estimated: NaN, never a confident zero
+        omega, cov, spread = np.full(3, np.nan), np.full((3, 3), np.nan), np.full(3, np.nan)
     else:
         omega, cov, spread, _ = _fit_both(profile, rect, left, right)
     formal = np.sqrt(np.clip(np.diag(cov), 0, None)) if n else np.full(3, np.nan)
@@ -228,15 +276,22 @@ def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], le
     groups = frame_of if use_frames else _region_groups(left, rect.image_size)
     resampled = _resampled(profile, rect, groups, left, right) if n >= settings.min_matches else None
     sigma = np.sqrt(np.fmax(formal, resampled if resampled is not None else 0.0) ** 2 + spread**2
-                    + _lens_floor(profile) ** 2)
+                    + _lens_floor(profile) ** 2) if np.all(np.isfinite(omega)) else np.full(3, np.nan)
     source = ("formal (residual-scaled)" if resampled is None or np.all(formal >= resampled)
               else f"jackknife over {'frames' if use_frames else 'image regions'}") + " + model spread" + (
         " + lens floor on yaw" if _lens_floor(profile)[1] > 0 else "")
     residual = right[:, 1] - predict_right(profile, rect, left, left[:, 0] - right[:, 0] + rect.doffs_px, omega,
                                            model="centre")[:, 1] if n else np.zeros(0)
     vertical, costs = _costs(profile, rect, omega, sigma, settings.distances_m)
+    weak = 1  # the axis a lens's p2 term mimics: yaw, or the profile's own axis that turned into yaw
+    if turn is not None:
+        omega, spread = turn.back(omega), turn.back_sigma(spread)
+        sigma, formal = turn.back_sigma(sigma), turn.back_sigma(formal)
+        resampled = None if resampled is None else turn.back_sigma(resampled)
+        weak = int(np.argmax(np.abs(turn.M[1])))
+        source += "; vertical rig: fitted with images and profile turned 90 deg, given in the profile's axes"
     omega_deg, sigma_deg = np.degrees(omega), np.degrees(sigma)
-    verdict, reasons = _verdict(omega_deg, sigma_deg, n, frames, settings)
+    verdict, reasons = _verdict(omega_deg, sigma_deg, n, frames, settings, weak=weak)
     return DriftResult(
         profile=profile.name, verdict=verdict, reasons=reasons, omega_deg=omega_deg, sigma_deg=sigma_deg,
         sigma_formal_deg=np.degrees(formal), sigma_resampled_deg=None if resampled is None else np.degrees(resampled),

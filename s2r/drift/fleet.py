@@ -15,7 +15,8 @@ FLEET.yaml::
 
 A robot whose files are broken or missing is reported as ``failed`` with the reason, never fatal; FLEET.yaml
 itself being malformed is bad input (CheckError, exit 2). Tasks run in worker processes (local pool or Dask),
-and return plain data; the parent writes every file.
+and return plain data; the parent writes every file. Paths are made absolute before they are sent: the workers
+of a ``--scheduler`` cluster must see the profiles and recordings at the same paths (a shared file system).
 """
 
 from __future__ import annotations
@@ -27,17 +28,22 @@ from typing import Any
 
 from s2r.drift.check import CheckSettings, check_drift
 from s2r.drift.report import check_report_html
-from s2r.drift.source import StereoSource, read_pairs
+from s2r.drift.source import StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
 from s2r.fileio import parse_yaml, read_text_file
 from s2r.progress import ProgressCallback, report
 
-__all__ = ["SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
+__all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
 
 #: Verdicts from most to least severe (the summary's sort order).
 SEVERITY = ("failed", "drifted", "cannot tell", "good")
-_NAME = re.compile(r"^[A-Za-z0-9_.\-]{1,64}$")
+_NAME = re.compile(r"^[A-Za-z0-9_\-][A-Za-z0-9_.\-]{0,63}$")  # never "." or "..": names are folders in -o
+#: Names the fleet's own output files take in -o (compared case-insensitively, as some file systems do).
+RESERVED_NAMES = frozenset({"index.html", "summary.json"})
+#: Largest fleet file (characters) and number of robots in one run.
+MAX_FLEET_CHARS = 4_000_000
+MAX_ROBOTS = 10_000
 _RECORDING_KEYS = {"folder", "left", "right", "bag", "left_topic", "right_topic", "max_frames"}
 
 
@@ -86,21 +92,29 @@ def _profile(base: Path, value: Any, where: str, path: Path) -> str:
 def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 20) -> list[RobotJob]:
     """The robots of FLEET.yaml; CheckError naming the file and entry when it is malformed."""
     path = Path(path)
-    data = parse_yaml(read_text_file(path, error=CheckError), path=path, error=CheckError)
+    text = read_text_file(path, error=CheckError)
+    if len(text) > MAX_FLEET_CHARS:  # before parsing: PyYAML takes minutes and gigabytes on tens of megabytes
+        raise CheckError(f"is {len(text) / 1e6:.1f} MB; a fleet file is at most {MAX_FLEET_CHARS / 1e6:g} MB",
+                         path=path, hint=f"split the fleet into files of at most {MAX_ROBOTS} robots")
+    data = parse_yaml(text, path=path, error=CheckError)
     robots = data.get("robots") if isinstance(data, dict) else None
     if not isinstance(robots, list) or not robots:
         raise CheckError("needs a non-empty list 'robots'", path=path, field="robots",
                          hint="robots: [{name: r01, profile: r01.yaml, recording: logs/r01}]")
-    base, jobs, seen = path.parent, [], set()
+    if len(robots) > MAX_ROBOTS:
+        raise CheckError(f"lists {len(robots)} robots; one run checks at most {MAX_ROBOTS}", path=path,
+                         field="robots", hint="split the fleet into several files (one run each)")
+    base, jobs, seen = path.absolute().parent, [], set[str]()  # absolute: workers of a --scheduler have another cwd
     for k, entry in enumerate(robots):
         where = f"robots[{k}]"
         if not isinstance(entry, dict) or not {"name", "profile", "recording"} <= entry.keys():
             raise CheckError("each robot needs name, profile and recording", path=path, field=where)
         name = entry["name"]
-        if not isinstance(name, str) or not _NAME.match(name) or name in seen:
+        if not isinstance(name, str) or not _NAME.match(name) or name.lower() in seen | RESERVED_NAMES:
             raise CheckError(f"bad or repeated name {name!r}", path=path, field=f"{where}.name",
-                             hint="unique names of letters, digits, _ . - (they name the report folders)")
-        seen.add(name)
+                             hint="unique names (ignoring case) of letters, digits, _ . -, not starting with '.', "
+                             "nor index.html or summary.json: they name the report folders")
+        seen.add(name.lower())
         jobs.append(RobotJob(name, _profile(base, entry["profile"], f"{where}.profile", path),
                              _source(base, entry["recording"], f"{where}.recording", path, max_frames), settings))
     return jobs
@@ -115,7 +129,7 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
 
     try:
         profile = load_profile(job.profile)
-        result = check_drift(profile, read_pairs(job.source), settings=job.settings)
+        result = check_drift(profile, read_pairs(job.source, sizes=profile_sizes(profile)), settings=job.settings)
     except S2RError as exc:
         return {"name": job.name, "verdict": "failed", "reasons": [exc.one_line()], "html": None}
     except Exception as exc:  # a bug must not take the fleet down; it is named as one

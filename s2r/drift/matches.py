@@ -3,7 +3,8 @@
 Features are found in the RAW images (SIFT, from OpenCV's main module) and only their coordinates are
 rectified (``cv2.undistortPoints`` with the profile's R1/P1 and R2/P2), so no image is resampled. A match
 survives Lowe's ratio test, a mutual best-match check, a horizontal disparity range (points in front of the
-rig) and a vertical gate wide enough for a few degrees of drift.
+rig, give or take the shift a yaw drift of up to 2 degrees adds to far points) and a vertical gate wide enough
+for about 2 degrees of drift.
 
 Frames and units: pixels of the rectified left / right images (OpenCV's 0-based convention), disparity
 ``d = x_left - x_right + doffs`` (pixels, positive in front of the rig).
@@ -26,7 +27,8 @@ FloatArray = NDArray[np.float64]
 
 #: Lowe's ratio test: best / second-best descriptor distance.
 RATIO = 0.8
-#: Vertical gate, as a fraction of the rectified focal length (0.035 rad: about 2 degrees of pitch).
+#: Vertical gate, and the negative-disparity margin, as a fraction of the rectified focal length (0.035 rad: about
+#: 2 degrees of pitch or roll across the image, or of yaw).
 VERTICAL_GATE = 0.035
 
 
@@ -35,7 +37,9 @@ class FrameMatches:
     """The matches of one stereo pair: (N, 2) rectified left and right pixels, and what was found.
 
     ``keypoints`` is the smaller of the two images' keypoint counts; ``sharpness`` the variance of the left
-    image's Laplacian (grey levels squared; low for blurred or textureless images).
+    image's Laplacian (grey levels squared; low for blurred or textureless images); ``behind`` the matches the
+    gates dropped only because their disparity is negative (points behind the rig: many of them, and few kept,
+    mean the left and right images are swapped); ``identical`` that both images are the same textured pixels.
     """
 
     name: str
@@ -43,6 +47,8 @@ class FrameMatches:
     right: FloatArray
     keypoints: int
     sharpness: float
+    behind: int = 0
+    identical: bool = False
 
     @property
     def count(self) -> int:
@@ -86,8 +92,9 @@ def match_frame(profile: StereoProfile, rect: StereoRectification, left: NDArray
     sharpness = float(cv2.Laplacian(left, cv2.CV_64F).var())
     keypoints = min(len(kp_l), len(kp_r))
     empty = np.zeros((0, 2))
-    if desc_l is None or desc_r is None or keypoints < 2:
-        return FrameMatches(name, empty, empty, keypoints, sharpness)
+    identical = keypoints > 0 and left.shape == right.shape and bool(np.array_equal(left, right))  # not blank
+    if desc_l is None or desc_r is None or keypoints < 2 or identical:
+        return FrameMatches(name, empty, empty, keypoints, sharpness, identical=identical)
     pairs = _mutual_matches(desc_l, desc_r)
     raw_l = np.array([kp_l[i].pt for i, _ in pairs], np.float64).reshape(-1, 2)
     raw_r = np.array([kp_r[j].pt for _, j in pairs], np.float64).reshape(-1, 2)
@@ -95,6 +102,8 @@ def match_frame(profile: StereoProfile, rect: StereoRectification, left: NDArray
     rect_r = _rectify_points(profile.right, raw_r, rect.R2, rect.P2)
     disparity = rect_l[:, 0] - rect_r[:, 0] + rect.doffs_px
     gate = VERTICAL_GATE * rect.fx_px
-    keep = (disparity > -2.0) & (disparity < 0.5 * rect.image_size[0]) & (np.abs(rect_r[:, 1] - rect_l[:, 1]) < gate)
-    keep &= np.isfinite(rect_l).all(axis=1) & np.isfinite(rect_r).all(axis=1)
-    return FrameMatches(name, rect_l[keep], rect_r[keep], keypoints, sharpness)
+    rows_agree = (np.abs(rect_r[:, 1] - rect_l[:, 1]) < gate) & np.isfinite(rect_l).all(axis=1) \
+        & np.isfinite(rect_r).all(axis=1)
+    keep = (disparity > -gate) & (disparity < 0.5 * rect.image_size[0]) & rows_agree  # -gate: a yaw drift
+    behind = int(np.count_nonzero(rows_agree & (disparity <= -gate) & (disparity > -0.5 * rect.image_size[0])))
+    return FrameMatches(name, rect_l[keep], rect_r[keep], keypoints, sharpness, behind=behind)

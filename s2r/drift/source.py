@@ -18,10 +18,13 @@ from numpy.typing import NDArray
 from s2r.calib import find_stereo_pairs
 from s2r.errors import CalibrationError, CheckError
 from s2r.imageio import decode_image_file
+from s2r.profile import StereoProfile
 
-__all__ = ["StereoSource", "read_pairs"]
+__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs"]
 
 GreyPair = tuple[str, NDArray[np.uint8], NDArray[np.uint8]]
+#: Expected (width, height) px of the left and the right images, or None for any size.
+Sizes = tuple[tuple[int, int], tuple[int, int]] | None
 
 
 @dataclass(frozen=True)
@@ -52,20 +55,34 @@ def _spread(count: int, limit: int) -> list[int]:
     return sorted({round(k * (count - 1) / (limit - 1)) for k in range(limit)})
 
 
-def _grey(path: Path) -> NDArray[np.uint8]:
+def _check_size(image: NDArray[np.uint8], size: tuple[int, int] | None, where: str | Path, side: str) -> None:
+    if size is not None and image.shape[:2] != (size[1], size[0]):
+        raise CheckError(f"{side} image is {image.shape[1]}x{image.shape[0]} px but the profile's {side} camera "
+                         f"is {size[0]}x{size[1]}", path=where, field="image size",
+                         hint="check the recording with the profile of the camera that took it")
+
+
+def _grey(path: Path, size: tuple[int, int] | None, side: str) -> NDArray[np.uint8]:
     image, reason = decode_image_file(path, cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise CheckError(reason, path=path, hint="pass readable image files")
+    _check_size(image, size, path, side)
     return np.asarray(image, np.uint8)
 
 
-def _folder_pairs(source: StereoSource) -> Iterator[GreyPair]:
+def _folder_pairs(source: StereoSource, sizes: Sizes) -> Iterator[GreyPair]:
     try:
         pairs = find_stereo_pairs(source.folder, left_glob=source.left_glob, right_glob=source.right_glob)
     except CalibrationError as exc:  # the same finder as calibrate; its message names the folder or glob
         raise CheckError(exc.message, path=exc.path, field=exc.field, hint=exc.hint) from None
+    if not pairs.names:
+        unpaired = f"; unpaired: {', '.join(p.name for p in pairs.unpaired[:3])}" if pairs.unpaired else ""
+        raise CheckError(f"no left/right image pairs (regular image files) found{unpaired}",
+                         path=source.describe(), hint="give each left image a right partner with the same number")
+    left_size, right_size = sizes if sizes is not None else (None, None)
     for k in _spread(len(pairs.names), source.max_frames):
-        yield pairs.names[k], _grey(pairs.left[k]), _grey(pairs.right[k])
+        yield (pairs.names[k], _grey(pairs.left[k], left_size, "left"),
+               _grey(pairs.right[k], right_size, "right"))
 
 
 def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
@@ -82,7 +99,7 @@ def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
     return kept
 
 
-def _bag_pairs(source: StereoSource) -> Iterator[GreyPair]:
+def _bag_pairs(source: StereoSource, sizes: Sizes) -> Iterator[GreyPair]:
     from s2r.calib.detect.bags import open_bag, paired_bag_frames
 
     assert source.bag is not None
@@ -101,14 +118,30 @@ def _bag_pairs(source: StereoSource) -> Iterator[GreyPair]:
                             source.max_frames)
     finally:
         reader.close()
+    if not frames:
+        raise CheckError("no stereo pairs on these topics", path=source.bag, field="topic",
+                         hint="check --left-topic and --right-topic")
     for k in _spread(len(frames), source.max_frames):
+        name, left, right = frames[k]
+        for side, image, size in zip(("left", "right"), (left, right), sizes or (None, None), strict=True):
+            _check_size(image, size, f"{source.bag} @ {name} s", side)
         yield frames[k]
 
 
-def read_pairs(source: StereoSource) -> Iterator[GreyPair]:
-    """``(name, left, right)`` grey (H, W) uint8 pairs of the recording, at most ``max_frames`` of them."""
+def read_pairs(source: StereoSource, *, sizes: Sizes = None) -> Iterator[GreyPair]:
+    """``(name, left, right)`` grey (H, W) uint8 pairs of the recording, at most ``max_frames`` of them.
+
+    Args:
+        sizes: the profile's ``((w, h) left, (w, h) right)`` px: an image of another size is a CheckError naming
+            its file (or bag and stamp), not a meaningless fit.
+    """
     if source.max_frames < 1:
         raise CheckError(f"must be at least 1, got {source.max_frames}", field="--max-frames", hint="e.g. 20")
     if source.bag is not None:
-        return _bag_pairs(source)
-    return _folder_pairs(source)
+        return _bag_pairs(source, sizes)
+    return _folder_pairs(source, sizes)
+
+
+def profile_sizes(profile: StereoProfile) -> Sizes:
+    """The ``sizes`` of :func:`read_pairs` for ``profile``'s two cameras."""
+    return ((profile.left.width_px, profile.left.height_px), (profile.right.width_px, profile.right.height_px))
