@@ -11,7 +11,8 @@ import sys
 import time
 from pathlib import Path
 
-from s2r.calib.detect import DETECTOR_VERSION, CornerCache
+from s2r.calib.detect import CornerCache
+from s2r.calib.detect.stream import DETECTOR_VERSION
 
 #: The board of these sets (`calibrate` has no default board).
 BOARD = ("--pattern", "9x6", "--square", "0.025")

@@ -20,6 +20,8 @@ from s2r.targets import CharucoTarget
 from tests.conftest import make_rig
 from tests.hostile._limits import run_s2r
 
+BOARD = ("--pattern", "9x6", "--square", "0.025")  # the synthetic sets' board (write_stereo_set)
+
 SHA = "cd" * 32
 PATTERN = (9, 6)
 
@@ -130,7 +132,7 @@ def test_calibrate_through_a_hostile_cache(tmp_path: Path, capsys: pytest.Captur
     folder = tmp_path / "set"
     write_stereo_set(make_rig(name="r", width=320, height=240), folder, views=8, seed=3, supersample=1)
     out = tmp_path / "rig.yaml"
-    assert main(["-q", "calibrate", str(folder), "-o", str(out), "--jobs", "1"]) == 0
+    assert main(["-q", "calibrate", str(folder), *BOARD, "-o", str(out), "--jobs", "1"]) == 0
     entries = sorted((tmp_path / "rig.yaml.corners").iterdir())
     assert len(entries) == 16
     entries[0].unlink()
@@ -138,12 +140,12 @@ def test_calibrate_through_a_hostile_cache(tmp_path: Path, capsys: pytest.Captur
     for path, kind in zip(entries[1:], sorted(BAD_ENTRIES), strict=False):
         path.write_text(json.dumps(BAD_ENTRIES[kind]), encoding="utf-8")
     capsys.readouterr()
-    done = run_s2r("-q", "calibrate", str(folder), "-o", str(out), "--jobs", "1", "--force", "--json",
+    done = run_s2r("-q", "calibrate", str(folder), *BOARD, "-o", str(out), "--jobs", "1", "--force", "--json",
                    timeout_s=60)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["detections_from_cache"] == 16 - 1 - len(BAD_ENTRIES)
     victim = tmp_path / "victim"
     victim.mkdir()
     (tmp_path / "other.yaml.corners").symlink_to(victim)
-    assert main(["-q", "calibrate", str(folder), "-o", str(tmp_path / "other.yaml"), "--jobs", "1"]) == 0
+    assert main(["-q", "calibrate", str(folder), *BOARD, "-o", str(tmp_path / "other.yaml"), "--jobs", "1"]) == 0
     assert list(victim.iterdir()) == [] and (tmp_path / "other.yaml").is_file()

@@ -19,6 +19,8 @@ from s2r.fileio import TEMP_PREFIX, OutputBatch, atomic_write_text
 from tests.conftest import make_rig
 from tests.hostile._limits import run_s2r
 
+BOARD = ("--pattern", "9x6", "--square", "0.025")  # the synthetic sets' board (write_stereo_set)
+
 
 def _victim(tmp_path: Path) -> tuple[Path, dict[str, bytes]]:
     victim = tmp_path / "victim"
@@ -115,10 +117,11 @@ def test_full_disk_on_the_calibration_report_leaves_no_profile(tmp_path: Path) -
     write_stereo_set(make_rig(name="r", width=320, height=240), tmp_path / "set", views=8, seed=3,
                      supersample=1)
     out, report = tmp_path / "rig.yaml", tmp_path / "report"
-    assert main(["-q", "calibrate", str(tmp_path / "set"), "-o", str(out), "--jobs", "1"]) == 0  # fills the cache
+    # the first run fills the cache
+    assert main(["-q", "calibrate", str(tmp_path / "set"), *BOARD, "-o", str(out), "--jobs", "1"]) == 0
     out.unlink()
-    done = run_s2r("-q", "calibrate", str(tmp_path / "set"), "-o", str(out), "--report", str(report), "--jobs", "1",
-                   file_size=64 << 10, timeout_s=60)
+    done = run_s2r("-q", "calibrate", str(tmp_path / "set"), *BOARD, "-o", str(out), "--report", str(report),
+                   "--jobs", "1", file_size=64 << 10, timeout_s=60)
     assert done.returncode == 2, done.stderr
     assert "index.html: cannot write: File too large" in done.stderr and done.stderr.count("\n") == 1
     assert not out.exists() and list(report.iterdir()) == []

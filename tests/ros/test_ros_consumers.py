@@ -158,7 +158,8 @@ def test_rosbag_written_bag_calibrates(ros_env: dict[str, str], tmp_path: Path) 
     assert int(count) == 12
     out = tmp_path / "rig.yaml"
     assert main(["calibrate", "--bag", str(bag), "--left-topic", "/stereo/left/image_raw", "--right-topic",
-                 "/stereo/right/image_raw", "-o", str(out), "--jobs", "1"]) == 0
+                 "/stereo/right/image_raw", "--pattern", "9x6", "--square", "0.025", "-o", str(out),
+                 "--jobs", "1"]) == 0
     p = load_profile_file(out)
     assert abs(p.left.fx_px - truth.left.fx_px) < 0.01 * truth.left.fx_px
     assert abs(p.baseline_m - truth.baseline_m) < 0.01 * truth.baseline_m
