@@ -146,31 +146,16 @@ def run(args: argparse.Namespace) -> int:
         "progress": ProgressBar(enabled=not (args.quiet or args.json)),
         "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
     }
-    result: Any
-    if target is not None:
-        result = _run_target(args, target, lens, common)
-    elif args.mono:
-        from s2r.calib.detect.inputs import find_mono_images
-        from s2r.calib.solve.mono import calibrate_mono
+    from s2r.calib.solve.rig import SwappedCamerasError  # loads OpenCV: only when a calibration runs
 
-        if args.bag is not None:
-            raise CalibrationError("--mono from a bag is not supported", field="--bag",
-                                   hint="export the images to a folder first")
-        result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
-    elif args.bag is not None:
-        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
-
-        result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                      max_dt_s=args.max_dt, every=args.every,
-                                      fix_intrinsics=args.fix_intrinsics, swap=args.swap,
-                                      **common)
-    else:
-        from s2r.calib.detect.inputs import find_stereo_pairs
-        from s2r.calib.solve.stereo import calibrate_stereo
-
-        pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
-        result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                  fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
+    try:
+        result = _solve(args, pattern, lens, target, common)
+    except SwappedCamerasError as exc:
+        if not args.swap:
+            raise
+        raise CalibrationError(exc.message, field=exc.field, path=exc.path,
+                               hint="--swap already exchanged the images, so they were right as given: run without "
+                               "--swap") from None
     with OutputBatch(force=args.force) as batch:  # the profile and its report, both or neither
         batch.add_text(out, profile_to_yaml(result.profile))
         if args.report is not None:
@@ -198,6 +183,36 @@ def _pm(value: float, sd: float | None, digits: int = 2) -> str:
     if sd is None:
         return f"{value:.{digits}f}±?"
     return f"{value:.{digits}f}±{sd:.2g}"
+def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, common: dict[str, Any]) -> Any:
+    """The calibration the arguments ask for: a ``--target``, ``--mono``, a bag, or stereo image pairs."""
+    result: Any
+    if target is not None:
+        result = _run_target(args, target, lens, common)
+    elif args.mono:
+        from s2r.calib.detect.inputs import find_mono_images
+        from s2r.calib.solve.mono import calibrate_mono
+
+        if args.bag is not None:
+            raise CalibrationError("--mono from a bag is not supported", field="--bag",
+                                   hint="export the images to a folder first")
+        result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
+    elif args.bag is not None:
+        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+
+        result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
+                                      max_dt_s=args.max_dt, every=args.every,
+                                      fix_intrinsics=args.fix_intrinsics, swap=args.swap,
+                                      **common)
+    else:
+        from s2r.calib.detect.inputs import find_stereo_pairs
+        from s2r.calib.solve.stereo import calibrate_stereo
+
+        pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
+        result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                                  fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
+    return result
+
+
 def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
     """Calibrate with corner ids (a target file, or a fisheye lens): mono, folder/glob pairs or a bag."""
     kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}

@@ -273,17 +273,13 @@ def load_opencv(
     data = read_opencv_stereo(files)
     first = data.paths[0]
     size = data.image_size or image_size
-    if size is None:
-        raise FormatError("image size not in the file", path=first, field="image_width/image_height",
-                          hint="pass --image-size WIDTHxHEIGHT")
     R, T_file = data.R, data.T
     if (R is None or T_file is None) and data.rectified is not None:
         R, T_file = data.rectified
         log.info("%s: R and T recovered from R1 P1 R2 P2 (P's Tx taken in metres)", first)
-    if R is None or T_file is None:
-        raise FormatError("holds intrinsics only (M1 D1 M2 D2), no extrinsics R and T", path=first,
-                          field="R" if data.R is None else "T",
-                          hint="pass the extrinsics.yml written with it as a second file")
+    _require_all(first, size=size is not None, extrinsics=R is not None and T_file is not None,
+                 R_missing=data.R is None)
+    assert size is not None and R is not None and T_file is not None
     if not (t_scale_m > 0 and np.isfinite(t_scale_m)):
         raise FormatError(f"T scale must be a positive number of metres, got {t_scale_m}", field="--units-m")
     T = T_file * t_scale_m
@@ -295,6 +291,22 @@ def load_opencv(
             notes="" if t_scale_m == 1.0 else f"T multiplied by {t_scale_m:g} (metres per unit of the file's T)"),
         description=f"imported from OpenCV FileStorage {', '.join(p.name for p in data.paths)}",
     )
+
+
+def _require_all(first: Path, *, size: bool, extrinsics: bool, R_missing: bool) -> None:
+    """One FormatError naming everything the file lacks (image size, extrinsics) and every fix at once."""
+    missing, fixes, fields = [], [], []
+    if not size:
+        missing.append("the image size")
+        fixes.append("pass --image-size WIDTHxHEIGHT")
+        fields.append("image_width/image_height")
+    if not extrinsics:
+        missing.append("the extrinsics R and T (it holds intrinsics only: M1 D1 M2 D2)")
+        fixes.append("pass the extrinsics.yml written with it as a second file")
+        fields.append("R" if R_missing else "T")
+    if missing:
+        raise FormatError(f"not in the file: {' and '.join(missing)}", path=first, field=", ".join(fields),
+                          hint="; ".join(fixes))
 
 
 def _check_t_units(T: FloatArray, t_scale_m: float, path: Path) -> None:

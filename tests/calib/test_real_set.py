@@ -77,6 +77,12 @@ def test_classic_mistakes_exit_2_with_one_line(tmp_path: Path, capsys: pytest.Ca
         assert main(["-q", "calibrate", *BOARD, str(folder), "-o", str(tmp_path / "s.yaml"),
                      "--swap", "--jobs", "2"]) == 0
         assert load_profile_file(tmp_path / "s.yaml").T[0] < 0
+        capsys.readouterr()
+        right_way = _copy_set(data, tmp_path / "ok")  # correct inputs with a wrong --swap: say to drop it
+        assert main(["-q", "calibrate", *BOARD, str(right_way), "-o", str(tmp_path / "w.yaml"), "--swap",
+                     "--jobs", "2"]) == 2
+        line = capsys.readouterr().err.strip()
+        assert "run without --swap" in line and "rerun with --swap" not in line
 
 
 def test_shuffled_right_images_are_named_and_dropped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -110,7 +110,8 @@ def _intrinsics_only(tmp: Path) -> Case:
                        ("D2", np.zeros((1, 5)))):
         storage.write(key, value)
     storage.release()
-    return [str(path), "--image-size", "640x480"], path, ["R: holds intrinsics only", "extrinsics.yml"]
+    return [str(path), "--image-size", "640x480"], path, ["R: not in the file: the extrinsics R and T",
+                                                           "extrinsics.yml"]
 
 
 def _missing_file(tmp: Path) -> Case:

@@ -53,8 +53,10 @@ def test_real_sample_intrinsics_yield_fx_534_803() -> None:
     assert data.M1[0, 0] == pytest.approx(534.803, abs=5e-4)
     assert data.M2[0, 0] == pytest.approx(534.803, abs=5e-4)
     assert data.R is None and data.T is None and data.image_size is None
-    with pytest.raises(FormatError, match=r"intrinsics\.yml: R: holds intrinsics only .* extrinsics\.yml"):
+    with pytest.raises(FormatError, match=r"intrinsics\.yml: R: not in the file: the extrinsics R and T .*extrinsics"):
         load_opencv(path, image_size=(640, 480))
+    with pytest.raises(FormatError, match=r"the image size and the extrinsics .*--image-size.*extrinsics\.yml"):
+        load_opencv(path)  # everything missing is said at once
 
 
 def test_real_sample_intrinsics_with_an_extrinsics_file(tmp_path: Path) -> None:
@@ -65,7 +67,7 @@ def test_real_sample_intrinsics_with_an_extrinsics_file(tmp_path: Path) -> None:
     storage.write("R", np.eye(3))
     storage.write("T", np.array([[-3.344], [0.042], [0.053]]))  # the README's figure, in squares
     storage.release()
-    with pytest.raises(FormatError, match=r"image_width/image_height: image size not in the file .*--image-size"):
+    with pytest.raises(FormatError, match=r"image_width/image_height: not in the file: the image size.*--image-size"):
         load_opencv([intrinsics, extrinsics])
     rig = load_opencv([intrinsics, extrinsics], image_size=(640, 480), t_scale_m=0.025)
     assert rig.left.fx_px == pytest.approx(534.803, abs=5e-4) and rig.right.fx_px == pytest.approx(534.803, abs=5e-4)

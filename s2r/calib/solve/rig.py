@@ -27,9 +27,16 @@ from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.errors import CalibrationError
 
-__all__ = ["PairScore", "RigInit", "check_rig", "initial_rig", "pair_consistency"]
+__all__ = ["PairScore", "RigInit", "SwappedCamerasError", "check_rig", "initial_rig", "pair_consistency"]
 
 FloatArray = NDArray[np.float64]
+
+
+class SwappedCamerasError(CalibrationError):
+    """The right camera came out to the left of the left one: the inputs look swapped (the CLI words the fix,
+    which depends on whether ``--swap`` was already given)."""
+
+
 #: Board distances (m) and baselines (m) beyond which ``--square`` is surely in the wrong unit.
 MAX_BOARD_DISTANCE_M = 30.0
 MAX_BASELINE_M = 3.0
@@ -159,7 +166,7 @@ def check_rig(init: RigInit, *, square_m: float, board_size_m: float) -> None:
             hint="--square is the square edge in metres, e.g. 0.025 for 25 mm squares")
     centre_right = -init.R.T @ init.T
     if centre_right[0] < 0 and abs(centre_right[0]) > abs(centre_right[1]):
-        raise CalibrationError(
+        raise SwappedCamerasError(
             f"the right camera is {abs(centre_right[0]) * 1000:.0f} mm to the LEFT of the left camera: "
             "left and right look swapped", field="input",
             hint="exchange the left and right images, or rerun with --swap to let s2r exchange them")
