@@ -120,6 +120,21 @@ def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 2
     return jobs
 
 
+def _one_thread_per_worker() -> None:
+    """Inside a Dask worker (a spawned process, one task at a time), OpenCV uses one thread: each worker then
+    takes one core, and adding workers adds throughput instead of contention. Never in a forked child or the
+    caller's own process (``cv2.setNumThreads`` after a fork can hang)."""
+    try:
+        from distributed import get_worker
+
+        get_worker()
+    except (ImportError, ValueError):
+        return
+    import cv2
+
+    cv2.setNumThreads(1)
+
+
 def run_robot(job: RobotJob) -> dict[str, Any]:
     """One robot's check as plain data (runs in a worker): the ``--json`` fields, ``html``, and its verdict.
 
@@ -127,6 +142,7 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
     """
     from s2r.registry import load_profile
 
+    _one_thread_per_worker()
     try:
         profile = load_profile(job.profile)
         result = check_drift(profile, read_pairs(job.source, sizes=profile_sizes(profile)), settings=job.settings)
