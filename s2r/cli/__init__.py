@@ -197,13 +197,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     _Parser.argv = list(sys.argv[1:] if argv is None else argv)
     streams = sys.stdout, sys.stderr
+    logger = logging.getLogger("s2r")
+    logging_state = logger.handlers[:], logger.level, logger.propagate
     sys.stdout, sys.stderr = _TerminalSafeStream(sys.stdout), _TerminalSafeStream(sys.stderr)
     try:
         args = parser.parse_args(argv)
         _configure_logging(args.quiet)
         return _run(args)
-    finally:
+    finally:  # an in-process caller (a script, a test) gets its streams and s2r's logger back as they were
         sys.stdout, sys.stderr = streams
+        logger.handlers[:], logger.level, logger.propagate = logging_state
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -8,8 +8,6 @@ channels), then medianBlur 5 and a 3x3 close. Written out here independently of 
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -23,14 +21,6 @@ from s2r.formats.s2r_yaml import dump_profile
 from s2r.profile import StereoProfile
 from tests.conftest import make_rig
 from tests.depth.test_seed_verbatim import _seed_call, _seed_post
-
-
-@pytest.fixture(autouse=True)
-def _s2r_logger_restored() -> Iterator[None]:
-    yield
-    logger = logging.getLogger("s2r")
-    logger.handlers.clear()
-    logger.propagate = True
 
 
 def _seed(profile: StereoProfile, left_png: Path, right_png: Path, *, post: bool) -> NDArray[np.int16]:

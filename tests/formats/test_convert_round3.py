@@ -3,8 +3,6 @@ camera files without stereo extrinsics, and a T in millimetres naming --units-m.
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -17,13 +15,6 @@ from tests.conftest import make_rig
 
 MAT = "!!opencv-matrix\n   rows: {r}\n   cols: {c}\n   dt: d\n   data: [{d}]\n"
 
-
-@pytest.fixture(autouse=True)
-def _s2r_logger_restored() -> Iterator[None]:
-    yield
-    logger = logging.getLogger("s2r")
-    logger.handlers.clear()
-    logger.propagate = True
 
 
 def _opencv(path: Path, T: str) -> Path:

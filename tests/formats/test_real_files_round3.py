@@ -13,8 +13,6 @@
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -25,14 +23,6 @@ from s2r.formats.detect import load_any
 
 FIX = Path(__file__).parent / "fixtures"
 
-
-@pytest.fixture(autouse=True)
-def _s2r_logger_restored() -> Iterator[None]:
-    """main() binds s2r's log handler to this test's captured stderr; unbind it for the next test's caplog."""
-    yield
-    logger = logging.getLogger("s2r")
-    logger.handlers.clear()
-    logger.propagate = True
 
 
 def _orthonormality(R: np.ndarray) -> float:

@@ -10,8 +10,6 @@
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -26,14 +24,6 @@ from s2r.formats.ros import ZERO_DISTORTION_MARKER, dump_ros_pair, ros_pair_from
 from s2r.formats.s2r_yaml import dump_profile
 from s2r.profile import MatcherSettings, StereoProfile
 from tests.conftest import make_rig
-
-
-@pytest.fixture(autouse=True)
-def _s2r_logger_restored() -> Iterator[None]:
-    yield
-    logger = logging.getLogger("s2r")
-    logger.handlers.clear()
-    logger.propagate = True
 
 
 def _rotated(**matcher: object) -> StereoProfile:

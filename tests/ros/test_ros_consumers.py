@@ -13,8 +13,6 @@ stereo_image_proc, rosbag), on a loopback-only roscore. Run with ``make test-ros
 from __future__ import annotations
 
 import json
-import logging
-from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -32,13 +30,6 @@ from tests.ros.conftest import run_helper
 
 pytestmark = pytest.mark.ros
 
-
-@pytest.fixture(autouse=True)
-def _s2r_logger_restored() -> Iterator[None]:
-    yield
-    logger = logging.getLogger("s2r")
-    logger.handlers.clear()
-    logger.propagate = True
 
 
 def _rotated_d435_like(**matcher: object) -> StereoProfile:
