@@ -10,6 +10,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 import numpy as np
@@ -17,8 +18,8 @@ import numpy as np
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
 
-__all__ = ["ProgressBar", "add_force", "add_json", "argparse_type", "load_profile", "parse_distances", "parse_pattern",
-           "print_json", "to_jsonable"]
+__all__ = ["ProgressBar", "add_force", "add_json", "add_recording_inputs", "argparse_type", "load_profile",
+           "parse_distances", "parse_pattern", "print_json", "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -90,6 +91,19 @@ def print_json(data: Any) -> None:
 def add_json(parser: argparse.ArgumentParser) -> None:
     """Add ``--json`` (machine-readable output on stdout)."""
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout")
+
+
+def add_recording_inputs(parser: argparse.ArgumentParser) -> None:
+    """Add the options a recording is given by (``depth-quality``, ``sensor fit``): folders or globs of left,
+    right or device-depth images, or a ROS bag with its topics and pairing tolerance."""
+    parser.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
+    parser.add_argument("--right", metavar="DIR|GLOB", help="right images: stereo pairs, depth through the pipeline")
+    parser.add_argument("--depth", metavar="DIR|GLOB", help="device depth images registered to the left images")
+    parser.add_argument("--bag", type=Path, help="ROS bag (ROS 1 file or ROS 2 folder) instead of folders")
+    parser.add_argument("--left-topic", help="left image topic in --bag")
+    parser.add_argument("--right-topic", help="right image topic in --bag")
+    parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
+    parser.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:

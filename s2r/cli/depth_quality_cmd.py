@@ -14,6 +14,7 @@ from s2r.cli._common import (
     ProgressBar,
     add_force,
     add_json,
+    add_recording_inputs,
     argparse_type,
     load_profile,
     parse_pattern,
@@ -45,14 +46,7 @@ def register(sub: Any) -> None:
         "image). --wall: a flat wall without a board (central ROI; refused when it is not a plane). Mismatched "
         "pixels are counted (outliers %) and left out of the RMS figures; a frame that cannot be scored says why.")
     parser.add_argument("profile", metavar="PROFILE", help="profile name or YAML path")
-    parser.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
-    parser.add_argument("--right", metavar="DIR|GLOB", help="right images: depth through the pipeline")
-    parser.add_argument("--depth", metavar="DIR|GLOB", help="device depth images registered to the left images")
-    parser.add_argument("--bag", type=Path, help="ROS bag (ROS 1 file or ROS 2 folder) instead of folders")
-    parser.add_argument("--left-topic", help="left image topic in --bag")
-    parser.add_argument("--right-topic", help="right image topic in --bag")
-    parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
-    parser.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
+    add_recording_inputs(parser)
     parser.add_argument("--preset", default="profile", choices=PRESETS, help="matcher preset for stereo pairs")
     parser.add_argument("--num-disparities", type=int, help="disparity range in px for stereo (multiple of 16)")
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), help="chessboard INNER corners, e.g. 9x6")

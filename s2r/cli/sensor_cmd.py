@@ -7,10 +7,18 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, argparse_type, load_profile, parse_pattern, print_json
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_json,
+    add_recording_inputs,
+    argparse_type,
+    load_profile,
+    parse_pattern,
+    print_json,
+)
 from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
 from s2r.fileio import check_output_free
@@ -34,14 +42,7 @@ def register(sub: Any) -> None:
         "noise sigma_d (px) against distance, the fill rate against distance and the dropout band at depth edges; "
         "from stereo pairs (--right) the pipeline's sub-pixel RMS and fill rate. Writes sensor.yaml.")
     fit.add_argument("--profile", required=True, help="the recording camera's profile (name or YAML path)")
-    fit.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
-    fit.add_argument("--right", metavar="DIR|GLOB", help="right images: stereo pairs (depth through the pipeline)")
-    fit.add_argument("--depth", metavar="DIR|GLOB", help="device depth registered to the left images")
-    fit.add_argument("--bag", type=Path, help="ROS bag (ROS 1 file or ROS 2 folder) instead of folders")
-    fit.add_argument("--left-topic", help="left image topic in --bag")
-    fit.add_argument("--right-topic", help="right image topic in --bag")
-    fit.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
-    fit.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
+    add_recording_inputs(fit)
     fit.add_argument("--preset", default="profile", choices=PRESETS,
                      help="matcher preset for stereo pairs (default profile)")
     fit.add_argument("--pattern", type=argparse_type(parse_pattern), required=True,
