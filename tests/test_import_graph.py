@@ -35,7 +35,8 @@ def _unit(path: Path) -> str:
     return parts[0]
 
 
-def _imports(path: Path) -> list[str]:
+def module_imports(path: Path) -> list[str]:
+    """Absolute module names imported by the Python file at ``path`` (relative imports left out)."""
     tree = ast.parse(path.read_text())
     found: list[str] = []
     for node in ast.walk(tree):
@@ -59,7 +60,7 @@ def test_imports_run_one_way() -> None:
     wrong = []
     for path in _modules():
         unit = _unit(path)
-        for name in _imports(path):
+        for name in module_imports(path):
             if not name.startswith("s2r.") or name == "s2r":
                 continue
             target = name.split(".")[1]
@@ -75,7 +76,7 @@ def test_heavy_libraries_stay_home() -> None:
     for path in _modules():
         rel = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
         homes = {"cv2": CV2_HOMES, "pybullet": PYBULLET_HOMES, "mujoco": MUJOCO_HOMES}
-        for name in _imports(path):
+        for name in module_imports(path):
             lib = name.split(".")[0]
             if lib in homes and not any(rel == h or rel.startswith(h + ".") for h in homes[lib]):
                 wrong.append(f"{rel} imports {lib}")

@@ -2,23 +2,13 @@
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
+
+from tests.test_import_graph import module_imports
 
 CALIB = Path(__file__).resolve().parents[2] / "s2r" / "calib"
 #: A stage may import only from stages with a lower rank.
 STAGES = {"detect": 0, "solve": 1, "report": 2}
-
-
-def _imports(path: Path) -> list[str]:
-    tree = ast.parse(path.read_text())
-    found: list[str] = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            found.extend(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            found.append(node.module)
-    return found
 
 
 def test_every_calib_module_is_in_a_stage() -> None:
@@ -30,7 +20,7 @@ def test_stages_import_one_way() -> None:
     wrong = []
     for stage, rank in STAGES.items():
         for path in sorted((CALIB / stage).glob("*.py")):
-            for name in _imports(path):
+            for name in module_imports(path):
                 parts = name.split(".")
                 if parts[:2] == ["s2r", "calib"] and (len(parts) < 3 or STAGES.get(parts[2], 99) > rank):
                     wrong.append(f"{stage}/{path.name} imports {name}")
@@ -38,7 +28,7 @@ def test_stages_import_one_way() -> None:
 
 
 def test_detect_has_no_import_cycle() -> None:
-    edges = {p.stem: {n.split(".")[3] for n in _imports(p) if n.startswith("s2r.calib.detect.")}
+    edges = {p.stem: {n.split(".")[3] for n in module_imports(p) if n.startswith("s2r.calib.detect.")}
              for p in (CALIB / "detect").glob("*.py") if p.stem != "__init__"}
 
     def reaches(start: str, goal: str, seen: set[str]) -> bool:
