@@ -392,18 +392,21 @@ class NotARegularFile(ValueError):
     """An input path that is a device, FIFO or socket, or a file over the size limit (the message says which)."""
 
 
-def read_regular_file(path: str | Path, *, limit: int) -> bytes:
+def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None, follow_links: bool = True
+                      ) -> bytes:
     """The bytes of the regular file ``path``, refusing anything that could read forever or block.
 
     ``/dev/zero`` or ``/dev/urandom`` never end, a FIFO blocks until someone writes: the file is opened without
     blocking and checked with ``fstat`` before a byte is read; a regular file over ``limit`` bytes is refused
-    from its size.
+    from its size. ``dir_fd`` opens ``path`` relative to an open folder; ``follow_links=False`` refuses a
+    symbolic link at ``path`` (OSError) instead of reading its target (for caches confined to one folder).
 
     Raises:
         NotARegularFile: a device, FIFO or socket, or a file over ``limit`` bytes.
         OSError: missing, unreadable, a folder.
     """
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | (0 if follow_links else getattr(os, "O_NOFOLLOW", 0))
+    fd = os.open(path, flags, dir_fd=dir_fd)
     try:
         info = os.fstat(fd)
         if stat.S_ISDIR(info.st_mode):

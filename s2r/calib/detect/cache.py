@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from s2r.fileio import TEMP_PREFIX, NotARegularFile
+from s2r.fileio import TEMP_PREFIX, NotARegularFile, read_regular_file
 
 __all__ = ["MAX_ENTRY_BYTES", "folder_usable", "read_entry", "remove_stale_temporaries", "validate_entry"]
 
@@ -50,25 +50,11 @@ def folder_usable(folder: Path) -> bool:
 
 def _read_bounded(folder: Path, name: str) -> bytes:
     """The bytes of ``folder/name``, opened without following a link at either level and without blocking."""
-    no_follow = getattr(os, "O_NOFOLLOW", 0)
-    dir_fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | no_follow)
+    dir_fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | getattr(os, "O_NOFOLLOW", 0))
     try:
-        fd = os.open(name, os.O_RDONLY | no_follow | getattr(os, "O_NONBLOCK", 0), dir_fd=dir_fd)
+        return read_regular_file(name, limit=MAX_ENTRY_BYTES, dir_fd=dir_fd, follow_links=False)
     finally:
         os.close(dir_fd)
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise NotARegularFile("not a regular file")
-        if info.st_size > MAX_ENTRY_BYTES:
-            raise NotARegularFile(f"{info.st_size} bytes, over {MAX_ENTRY_BYTES}")
-        with os.fdopen(fd, "rb", closefd=False) as handle:
-            data = handle.read(MAX_ENTRY_BYTES + 1)
-        if len(data) > MAX_ENTRY_BYTES:
-            raise NotARegularFile("grew past the limit while read")
-        return data
-    finally:
-        os.close(fd)
 
 
 def read_entry(folder: Path, name: str) -> Any | None:
