@@ -95,13 +95,13 @@ class DriftResult:
 
 
 def _fit_both(profile: StereoProfile, rect: Any, left: FloatArray, right: FloatArray
-              ) -> tuple[FloatArray, FloatArray, FloatArray, float]:
-    """Mean omega of the two physical models, their formal covariance (the larger), half-difference, scale."""
+              ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Mean omega of the two physical models, their formal covariance (the larger) and their half-difference."""
     fits = [fit_rotation(profile, rect, left, right, model=m) for m in MODELS]
     omegas = np.array([f.omega for f in fits])
     covariance = fits[0].covariance if np.trace(fits[0].covariance) >= np.trace(fits[1].covariance) \
         else fits[1].covariance
-    return omegas.mean(axis=0), covariance, np.abs(omegas[0] - omegas[1]) / 2.0, fits[0].scale_px
+    return omegas.mean(axis=0), covariance, np.abs(omegas[0] - omegas[1]) / 2.0
 
 
 def _resampled(profile: StereoProfile, rect: Any, groups: NDArray[np.int_], left: FloatArray,
@@ -270,7 +270,7 @@ def _summarise(profile: StereoProfile, rect: Any, frames: list[FrameMatches], le
     if n < max(10, settings.min_matches // 2):  # not estimated: NaN, never a confident zero
         omega, cov, spread = np.full(3, np.nan), np.full((3, 3), np.nan), np.full(3, np.nan)
     else:
-        omega, cov, spread, _ = _fit_both(profile, rect, left, right)
+        omega, cov, spread = _fit_both(profile, rect, left, right)
     formal = np.sqrt(np.clip(np.diag(cov), 0, None)) if n else np.full(3, np.nan)
     use_frames = len(frames) >= settings.min_frames_for_resampling
     groups = frame_of if use_frames else _region_groups(left, rect.image_size)

@@ -12,8 +12,8 @@ Two physical readings of "the right camera turned" differ by a small translation
 - ``translation``: the profile's ``T`` still holds (``T_true = T_profile``), which moves the centre by
   ``-(omega x T)`` and adds a depth-dependent term.
 
-Both are linear near zero; the one with the lower robust cost is kept when the data tell them apart (they do
-when the scene spans depths), else the two answers are averaged and their half-difference enters sigma.
+Both are linear near zero and both are fitted; :mod:`s2r.drift.check` reports their mean, and their
+half-difference enters sigma (it is small unless near points dominate the scene).
 
 Each match is a point: its rectified left pixel and disparity give a homogeneous 3D point in the rectified left
 frame; the profile (rotated by ``dR``) then predicts the rectified right row. Residual = measured right row -
@@ -42,13 +42,11 @@ _HUBER_K = 1.5
 @dataclass(frozen=True)
 class RotationFit:
     """``omega`` (3,) rad about the right optical axes (x, y, z), its formal covariance (3, 3) rad^2, the robust
-    residual scale (px), the inlier mask, the Huber cost and the model (``centre`` or ``translation``)."""
+    residual scale (px) and the model (``centre`` or ``translation``)."""
 
     omega: FloatArray
     covariance: FloatArray
     scale_px: float
-    inliers: NDArray[np.bool_]
-    cost: float
     model: str
 
 
@@ -125,15 +123,13 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
     disparity = left[:, 0] - right[:, 0] + rect.doffs_px
     extra = lens_nuisance(rect, left) if nuisance else np.zeros((len(left), 0))
     params = np.zeros(3 + extra.shape[1])
-    weights = np.ones(len(left))
     scale = robust_scale(right[:, 1] - left[:, 1])
-    J = np.zeros((len(left), len(params)))
+    A = np.zeros((len(params), len(params)))
 
     def residual_of(p: FloatArray) -> FloatArray:
         predicted = predict_right(profile, rect, left, disparity, p[:3], model=model)[:, 1] + extra @ p[3:]
         return np.asarray(right[:, 1] - predicted, np.float64)
 
-    residual = residual_of(params)
     for _ in range(iterations):
         residual = residual_of(params)
         scale = max(robust_scale(residual), 1e-3)
@@ -146,9 +142,5 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
         params = params + step
         if np.max(np.abs(step[:3])) < 1e-9:
             break
-    residual = residual_of(params)
-    A = J.T @ (J * weights[:, None])
-    covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]
-    u = np.abs(residual) / (_HUBER_K * scale)
-    cost = float(np.sum(np.where(u <= 1.0, 0.5 * u**2, u - 0.5)))
-    return RotationFit(params[:3].copy(), covariance, scale, np.abs(residual) <= 3.0 * scale, cost, model)
+    covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]  # A: the last iteration's
+    return RotationFit(params[:3].copy(), covariance, scale, model)
