@@ -129,7 +129,6 @@ class ProgressBar:
         self.terminal = self.stream.isatty() if terminal is None else terminal
         self.width = width
         self.log_every_s = log_every_s
-        self.quiet_start_s = log_every_s
         self._last = 0.0
         self._start = time.monotonic()
         self._state: tuple[int, int, str] | None = None
@@ -161,7 +160,7 @@ class ProgressBar:
             previous, self._state = self._state, (done, total, label)
             now = time.monotonic()
             stage_changed = previous is None or previous[2] != label
-            if now - self._start < self.quiet_start_s:  # a run that ends within seconds stays silent
+            if now - self._start < self.log_every_s:  # a run that ends within seconds stays silent
                 pass
             elif stage_changed or done >= total or now - self._printed_at >= self.log_every_s:
                 self._print_state(now)
