@@ -288,9 +288,8 @@ def _print_honest(figures: dict[str, Any]) -> None:
     warp = figures.get("board_warp")
     if warp:
         sd = [f"±{v:.2g}" if v is not None else "±?" for v in warp["warp_std_mm"]]
-        state = "used: it lowers" if warp["used"] else "not used: it does not lower"
-        print(f"  board bend x {warp['warp_mm'][0]:+.3f}{sd[0]} mm, y {warp['warp_mm'][1]:+.3f}{sd[1]} mm ({state} the "
-              f"stereo held-out error, {warp['heldout_flat_px']:.3f} px flat, {warp['heldout_warped_px']:.3f} px bent)")
+        print(f"  board bend x {warp['warp_mm'][0]:+.3f}{sd[0]} mm, y {warp['warp_mm'][1]:+.3f}{sd[1]} mm "
+              f"({warp['decision']})")
     held = figures.get("stereo_heldout")
     if not held:
         return

@@ -36,8 +36,8 @@ from numpy.typing import NDArray
 from s2r.calib.detect import cache
 from s2r.calib.detect.chessboard import detect_board
 from s2r.calib.detect.markers import detect_target
+from s2r.calib.detect.workers import worker_pool
 from s2r.errors import S2RError
-from s2r.executor import local_pool
 from s2r.fileio import atomic_write_text
 from s2r.imageio import decode_image_file
 from s2r.progress import ProgressCallback, report
@@ -186,6 +186,7 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
     window = max(1, 4 * jobs)
     done = 0
     pool: ProcessPoolExecutor | None = None
+    workers = contextlib.ExitStack()
 
     def store(fut: Future[Detection]) -> None:
         # runs as soon as a worker finishes (even ahead of earlier items), so an interrupt loses nothing done
@@ -212,7 +213,7 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
             elif jobs <= 1:
                 pending.append(_detect_item(item, pattern, target))
             else:
-                pool = pool or local_pool(jobs)
+                pool = pool or workers.enter_context(worker_pool(jobs))
                 future = pool.submit(_detect_item, item, pattern, target)
                 future.add_done_callback(store)
                 pending.append(future)
@@ -221,5 +222,4 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
         while pending:
             yield finish(pending.popleft())
     finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        workers.close()

@@ -193,10 +193,9 @@ def _honest_lines(result: StereoCalibration) -> list[str]:
         out.append(f"RMS {sol.rms_px:.3f} px over the inlier corners, {sol.rms_all_px:.3f} px over all "
                    f"{sol.corners_total} ({rejected} rejected as outliers).")
     w = result.board_warp
-    if w is not None and w["heldout_flat_px"] is not None and w["heldout_warped_px"] is not None:
+    if w is not None:
         out.append(f"Board bend (mrcal-style parabola, at the board centre): x {w['warp_mm'][0]:+.3f} mm, y "
-                   f"{w['warp_mm'][1]:+.3f} mm; {'used' if w['used'] else 'not used'} (stereo held-out error "
-                   f"{w['heldout_flat_px']:.3f} px flat, {w['heldout_warped_px']:.3f} px bent).")
+                   f"{w['warp_mm'][1]:+.3f} mm; {w['decision']}.")
     h = result.heldout
     if h is not None:
         out.append(f"Stereo held-out error {h.heldout_px:.3f} px over the inlier corners of pairs left out of the fit "

@@ -23,7 +23,7 @@ from s2r.calib.solve.observations import StereoObservation, chessboard_observati
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.resample import PARAMETERS, FoldOutcome, FoldTask, jackknife_std, run_folds, split_folds
 
-__all__ = ["ParameterStd", "StereoHeldout", "stereo_heldout"]
+__all__ = ["BEND_SIGMAS", "ParameterStd", "StereoHeldout", "bend_significant", "stereo_heldout"]
 
 FloatArray = NDArray[np.float64]
 Corners = NDArray[np.float32]
@@ -31,6 +31,9 @@ Corners = NDArray[np.float32]
 #: held-out errors, not every pair, and this bounds its cost (the chosen model's held-out error and jackknife
 #: use every pair).
 MAX_COMPARE_VIEWS = 16
+#: A board bend within this many (covariance) std of flat on both axes is not tested on held-out pairs: it
+#: cannot lower the held-out error by more than the noise, and the test costs four more fold solves.
+BEND_SIGMAS = 2.0
 
 
 @dataclass(frozen=True)
@@ -112,7 +115,8 @@ def _tasks(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel,
                          [sol.rvecs[i] for i in train], [sol.tvecs[i] for i in train], warp=sol.warp_m)
         tasks.append(FoldTask(lens, tuple(obs[i] for i in train), tuple(obs[i] for i in test), init,
                               tuple(sol.rvecs[i] for i in test), tuple(sol.tvecs[i] for i in test), max_error_px,
-                              warp=sol.warp_m is not None))
+                              warp=sol.warp_m is not None,
+                              masks=[list(sol.inliers[i]) for i in train] if sol.inliers else None))
     return tasks
 
 
@@ -176,36 +180,48 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
     order of ``sol.rvecs``), the lens models of ``compare`` scored on the same folds (None without one
     other model; on at most ``MAX_COMPARE_VIEWS`` evenly spaced pairs, every model on the same ones), and the
     same figures with the board's bend solved, and that solve (``warp_solve``, run in the pool beside the folds;
-    its folds start from ``sol`` with a flat board) when given. All None when there are too few views for two
-    folds."""
+    its folds start from ``sol`` with a flat board, and run only when :func:`bend_significant`; else the third
+    item is None) when given. All None when there are too few views for two folds."""
     obs = _observations(names, left, right, obj)
     folds = split_folds(len(obs))
     if not folds:
         return None, None, None, None
     others = [m for m in compare if m != lens.name and m in LENS_MODELS]
     tasks = _tasks(obs, sol, lens, folds, max_error_px)
-    w_folds = folds if warp_solve is not None else []
-    if w_folds:
-        tasks += _tasks(obs, replace(sol, warp_m=np.zeros(2)), lens, w_folds, max_error_px)
     sub = np.unique(np.linspace(0, len(obs) - 1, min(len(obs), MAX_COMPARE_VIEWS)).round().astype(int))
     small = len(sub) < len(obs) and bool(others)
     sub_sol, sub_obs = (_subset(sol, sub), [obs[i] for i in sub]) if small else (sol, obs)
     sub_folds = split_folds(len(sub_obs)) if small else folds
     for m in ([lens.name] if small else []) + others:
         tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px)
-    outcomes, warped = run_folds(tasks, jobs=jobs, side=warp_solve)
-    k, kw = len(folds), len(w_folds)
+    flat = replace(sol, warp_m=np.zeros(2))
+
+    def warp_tasks(warped: PairSolution | None) -> list[FoldTask]:
+        return _tasks(obs, flat, lens, folds, max_error_px) if warped is not None and bend_significant(warped) else []
+
+    outcomes, warped, w_outcomes = run_folds(tasks, jobs=jobs, side=warp_solve, then=warp_tasks)
+    k = len(folds)
     result = _summary(outcomes[:k], sol)
-    w_result = _summary(outcomes[k:k + kw], warped) if warped is not None and kw else None
+    w_result = _summary(w_outcomes, warped) if warped is not None and w_outcomes else None
     if not others or not sub_folds:
         return result, None, w_result, warped
-    rest = outcomes[k + kw:] if small else [*outcomes[:k], *outcomes[k + kw:]]
+    rest = outcomes[k:] if small else [*outcomes[:k], *outcomes[k:]]
     ks = len(sub_folds)
     scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]
     return result, _comparison({m: scored[m] for m in order}, lens.name), w_result, warped
 
 
+def bend_significant(warped: PairSolution, k: float = BEND_SIGMAS) -> bool:
+    """Whether the solved board bend differs from flat by more than ``k`` of its (covariance) std on either
+    axis (or its std is unknown): only then is the bent board tested on held-out pairs."""
+    if warped.warp_m is None:
+        return False
+    std = warped.warp_std_m if warped.warp_std_m is not None else np.full(2, np.nan)
+    return bool(np.any(~np.isfinite(std)) or np.any(np.abs(warped.warp_m) > k * std))
+
+
 def _subset(sol: PairSolution, idx: NDArray[np.int_]) -> PairSolution:
     """``sol`` with only the board poses of views ``idx`` (the warm start of the lens-model comparison)."""
-    return replace(sol, rvecs=tuple(sol.rvecs[i] for i in idx), tvecs=tuple(sol.tvecs[i] for i in idx))
+    return replace(sol, rvecs=tuple(sol.rvecs[i] for i in idx), tvecs=tuple(sol.tvecs[i] for i in idx),
+                   inliers=tuple(sol.inliers[i] for i in idx) if sol.inliers else ())

@@ -34,6 +34,8 @@ from s2r.errors import CalibrationError
 __all__ = ["JointInit", "JointSolution", "solve_joint"]
 
 FloatArray = NDArray[np.float64]
+#: Per view index, the residuals (N, 2) px of all its corners per camera (None where a camera saw nothing).
+Residuals = dict[int, tuple[FloatArray | None, FloatArray | None]]
 _MIN_VIEWS = 5
 
 
@@ -105,6 +107,8 @@ def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks
     for _ in range(iterations):
         g0, (rv0, tv0) = state.global_vec(), state.copy_views()
         dg, dv = _step(A, b, blocks, lam)
+        if lam <= 1e-3 and -(float(b @ dg) + float(np.sum(blocks[2] * dv))) < rel_tol * max(ssr, 1e-12):
+            return  # a near-Gauss-Newton step that predicts a fall below the tolerance: converged here
         state.set_global(g0 + dg)
         for k, d in zip(active, dv, strict=True):
             state.rv[k], state.tv[k] = rv0[k] + d[:3], tv0[k] + d[3:]
@@ -130,8 +134,9 @@ def _robust_threshold(values: FloatArray, k_mad: float = 5.0, k_median: float = 
 
 def _reject(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int], *,
             view_thr: float | None, corner_k: float, corner_floor_px: float,
-            max_view_error_px: float | None) -> tuple[bool, float]:
-    """Drop outlier corners and views (in place); returns (anything changed?, the view RMS threshold px).
+            max_view_error_px: float | None) -> tuple[bool, float, Residuals]:
+    """Drop outlier corners and views (in place); returns (anything changed?, the view RMS threshold px, the
+    residuals of every corner of the views active on entry).
 
     A view's RMS is over the inlier corners of both cameras; the threshold is ``max_view_error_px`` or a
     robust one (median + 5 MAD-sigmas, at least 2x the median and 0.3 px) fixed at the first round."""
@@ -162,7 +167,7 @@ def _reject(state: State, views: Sequence[StereoObservation], masks: Masks, acti
         for k in bad_views:
             active.remove(k)
         changed = True
-    return changed, view_thr
+    return changed, view_thr, res
 
 
 def _covariance(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
@@ -188,6 +193,19 @@ def _covariance(state: State, views: Sequence[StereoObservation], masks: Masks, 
     return cov, tuple(n for n, b in zip(names, bad, strict=True) if b), float(np.sqrt(sigma2))
 
 
+def _start_masks(views: Sequence[StereoObservation], given: Masks | None) -> Masks:
+    """Copies of ``given`` where they fit the views (same corner count), else every corner kept."""
+    out: Masks = []
+    for k, v in enumerate(views):
+        row: list[NDArray[np.bool_] | None] = []
+        for c, o in enumerate((v.left, v.right)):
+            m = None if given is None or k >= len(given) else given[k][c]
+            row.append(None if o is None else m.copy() if m is not None and m.shape == (len(o.ids),)
+                       else np.ones(len(o.ids), bool))
+        out.append(row)
+    return out
+
+
 def _names(lens: LensModel, warp: bool = False) -> list[str]:
     intr = ["fx", "fy", "cx", "cy", *(lens.coef_names[i] for i in lens.free)]
     return [f"{side} {n}" for side in ("left", "right") for n in intr] + (["warp x", "warp y"] if warp else []) \
@@ -197,13 +215,14 @@ def _names(lens: LensModel, warp: bool = False) -> list[str]:
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
                 max_view_error_px: float | None = None, rel_tol: float = 1e-10,
-                covariance: bool = True, warp: bool = False) -> JointSolution:
+                covariance: bool = True, warp: bool = False, masks: Masks | None = None) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
     ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
     from the full solution, use a looser one); ``covariance`` False skips the covariance (NaN; they need
     none); ``warp`` also solves the board's bend (two parameters, metres, see ``State.warp_basis``; the
-    initial one from ``init.warp``).
+    initial one from ``init.warp``); ``masks`` the starting inlier masks per view and camera (a warm start
+    from an earlier solve of these views: its rejected corners stay out; default every corner).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -212,14 +231,16 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
         raise CalibrationError(f"only {len(views)} views for the joint solve, at least {_MIN_VIEWS} needed",
                                hint="record more views with the board visible in both cameras")
     state = State(lens, init, warp=warp, views=views)
-    masks: Masks = [[None if o is None else np.ones(len(o.ids), bool) for o in (v.left, v.right)] for v in views]
+    masks = _start_masks(views, masks)
     active = list(range(len(views)))
     view_thr: float | None = None
+    final: Residuals | None = None
     for _ in range(max_rounds):
         _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
-        changed, view_thr = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
-                                    corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
+        changed, view_thr, res = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
+                                         corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
         if not changed:
+            final = res if len(res) == len(views) else None  # the state these residuals came from is final
             break
     else:
         _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
@@ -235,11 +256,10 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     residuals = []
     sq, n = 0.0, 0
     dropped = 0
-    every = all_residuals(state, views, list(range(len(views))))
+    every = final if final is not None else all_residuals(state, views, list(range(len(views))))
     for k in range(len(views)):
-        res = every[k]
-        residuals.append(res)
-        for c, r in enumerate(res):
+        residuals.append(every[k])
+        for c, r in enumerate(every[k]):
             mask = masks[k][c]
             if r is None or mask is None:
                 continue

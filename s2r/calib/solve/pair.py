@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
 from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
+from s2r.calib.solve.jointterms import Masks
 from s2r.calib.solve.lens import LensModel, lens_model
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.rig import RigInit, check_rig, initial_rig, pair_consistency
@@ -44,7 +45,9 @@ class PairSolution:
     ``rms_all_px`` the RMS over every corner of the used views (rejected ones too) of ``corners_total``;
     ``rejected_corners`` (input index, left count, right count) of the views that lost corners as outliers;
     ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only);
-    ``warp_m`` the board's bend (x, y; metres at the board centre) and its std when it was solved."""
+    ``warp_m`` the board's bend (x, y; metres at the board centre) and its std when it was solved;
+    ``inliers`` per used view (left, right) the kept-corner masks (joint solve only: the warm start of the
+    resampling solves)."""
 
     K1: FloatArray
     D1: FloatArray
@@ -76,6 +79,7 @@ class PairSolution:
     cov_right: FloatArray | None = None
     warp_m: FloatArray | None = None
     warp_std_m: FloatArray | None = None
+    inliers: tuple[tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None], ...] = ()
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -122,9 +126,9 @@ def _intrinsics_cov(sol: JointSolution, side: str, lens: LensModel) -> FloatArra
 
 
 def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointInit, lens: LensModel,
-           max_error_px: float | None, *, warp: bool = False) -> PairSolution:
+           max_error_px: float | None, *, warp: bool = False, masks: Masks | None = None) -> PairSolution:
     start = init if isinstance(init, JointInit) else init.joint_init()
-    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp)
+    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp, masks=masks)
     u = sol.T / np.linalg.norm(sol.T)
     b_std = float(np.sqrt(max(0.0, float(u @ sol.translation_cov() @ u))))
     r_std = float(np.degrees(np.sqrt(max(0.0, float(np.trace(sol.rotation_cov()))))))
@@ -156,7 +160,7 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointI
         threshold_px=thr, outliers=outliers, mismatched=(), unobservable=sol.unobservable,
         residuals=tuple((r, q) for r, q in zip(rl, rr, strict=True)),  # type: ignore[misc]
         rvecs=tuple(sol.rvecs[j] for j in used), tvecs=tuple(sol.tvecs[j] for j in used),
-        warp_m=sol.warp.copy() if warp else None,
+        warp_m=sol.warp.copy() if warp else None, inliers=tuple(sol.inliers[j] for j in used),
         warp_std_m=np.array([sol.std("warp x"), sol.std("warp y")]) if warp else None,
         method="s2r calibrate: OpenCV calibrateCameraExtended per camera to initialise, then one joint "
                f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics, board poses"
@@ -212,7 +216,8 @@ def solve_pair_warped(names: Sequence[str], left: Sequence[Corners], right: Sequ
     with the board's bend also solved, started from ``base``."""
     obs = _observations(names, left, right, obj)
     init = JointInit(base.K1, base.D1, base.K2, base.D2, base.R, base.T, base.rvecs, base.tvecs)
-    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True)
+    masks = [list(m) for m in base.inliers] or None
+    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True, masks=masks)
 
 
 def solve_pair(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,

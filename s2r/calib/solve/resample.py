@@ -18,7 +18,8 @@ solve (:func:`s2r.calib.solve.joint.solve_joint`, same outlier rules: corners be
 - **Lens-model choice**: the same folds for every candidate model (warm-started from the chosen model's fit),
   scored by the stereo held-out error.
 
-The fold solves run in parallel in s2r's process pool (:func:`s2r.executor.local_pool`, the one executor seam).
+The fold solves run in parallel in s2r's process pool (:func:`s2r.calib.detect.workers.worker_pool` over
+:func:`s2r.executor.local_pool`, the one executor seam).
 """
 
 from __future__ import annotations
@@ -31,13 +32,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.detect.workers import worker_pool
 from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
+from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations
 from s2r.calib.solve.jointterms import State as SolveState
-from s2r.calib.solve.jointterms import all_residuals, normal_equations
 from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError
-from s2r.executor import local_pool
 
 __all__ = ["FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std", "run_fold", "run_folds",
            "split_folds"]
@@ -56,8 +57,9 @@ _FOLD_TOL = 1e-5
 
 @dataclass(frozen=True)
 class FoldTask:
-    """One fold of one lens model: training and held-out views, a warm start (training poses), the held-out
-    views' starting poses (board in the left camera), and the outlier option of the full solve."""
+    """One fold of one lens model: training and held-out views, a warm start (training poses and, in
+    ``masks``, the full solve's inlier corners of the training views), the held-out views' starting poses
+    (board in the left camera), and the outlier option of the full solve."""
 
     lens: LensModel
     train: tuple[StereoObservation, ...]
@@ -67,6 +69,7 @@ class FoldTask:
     test_tvecs: tuple[FloatArray, ...]
     max_view_error_px: float | None
     warp: bool = False
+    masks: Masks | None = None
 
 
 @dataclass(frozen=True)
@@ -173,7 +176,7 @@ def run_fold(task: FoldTask) -> FoldOutcome:
     nan = np.full((3, 3), np.nan)
     try:
         sol = solve_joint(task.train, task.lens, task.init, max_view_error_px=task.max_view_error_px,
-                          rel_tol=_FOLD_TOL, covariance=False, warp=task.warp)
+                          rel_tol=_FOLD_TOL, covariance=False, warp=task.warp, masks=task.masks)
     except (CalibrationError, np.linalg.LinAlgError, cv2.error) as exc:
         return FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed=str(exc))
     sq_in, sq_all = _heldout(task, sol)
@@ -181,19 +184,23 @@ def run_fold(task: FoldTask) -> FoldOutcome:
                        warp=sol.warp if task.warp else None)
 
 
-def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | None = None
-              ) -> tuple[list[FoldOutcome], T | None]:
-    """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1), and the
-    result of ``side`` (a picklable call, submitted first so it runs beside the folds)."""
+def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | None = None,
+              then: Callable[[T], Sequence[FoldTask]] | None = None
+              ) -> tuple[list[FoldOutcome], T | None, list[FoldOutcome]]:
+    """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1); the result of
+    ``side`` (a picklable call, submitted first so it runs beside the folds); and the outcomes of the tasks
+    ``then`` makes of that result (submitted as soon as it is known, e.g. only when it is worth testing)."""
     if jobs <= 1 or len(tasks) <= 1:
-        return [run_fold(t) for t in tasks], None if side is None else side()
-    pool = local_pool(min(jobs, len(tasks)))
-    try:
-        extra = None if side is None else pool.submit(side)
-        outcomes = list(pool.map(run_fold, tasks))
-        return outcomes, None if extra is None else extra.result()
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        extra = None if side is None else side()
+        more = [] if extra is None or then is None else then(extra)
+        return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
+    with worker_pool(min(jobs, len(tasks))) as pool:
+        side_future = None if side is None else pool.submit(side)
+        futures = [pool.submit(run_fold, t) for t in tasks]
+        extra = None if side_future is None else side_future.result()
+        more = [] if extra is None or then is None else then(extra)
+        later = [pool.submit(run_fold, t) for t in more]
+        return [f.result() for f in futures], extra, [f.result() for f in later]
 
 
 def jackknife_std(outcomes: Sequence[FoldOutcome], R_full: FloatArray) -> FloatArray:

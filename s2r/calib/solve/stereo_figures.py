@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from s2r.calib.solve.heldout import StereoHeldout
+from s2r.calib.solve.heldout import BEND_SIGMAS, StereoHeldout
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
 from s2r.calib.solve.views import REPEAT_PX, StereoViews, merge_repeats
@@ -61,7 +61,9 @@ def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[i
 def choose_warp(sol: PairSolution, held: StereoHeldout | None, warped: PairSolution | None,
                  held_w: StereoHeldout | None) -> tuple[PairSolution, StereoHeldout | None, dict[str, Any] | None]:
     """The flat-board or the bent-board solve, whichever has the lower stereo held-out error, and the bend's
-    figures (mm). ``warped``'s views are positions in ``sol``'s kept views; the result indexes like ``sol``."""
+    figures (mm, with ``decision`` in words). ``held_w`` None with a ``warped`` solve: the bend was within
+    ``BEND_SIGMAS`` std of flat, so not tested. ``warped``'s views are positions in ``sol``'s kept views; the
+    result indexes like ``sol``."""
     if warped is None or warped.warp_m is None:
         return sol, held, None
     used = held is not None and held_w is not None and held_w.heldout_px < held.heldout_px
@@ -69,13 +71,23 @@ def choose_warp(sol: PairSolution, held: StereoHeldout | None, warped: PairSolut
     figures = {"used": used, "warp_mm": [float(v) * 1000 for v in warped.warp_m],
                "warp_std_mm": [_nan_none(float(v) * 1000) for v in std],
                "heldout_flat_px": None if held is None else held.heldout_px,
-               "heldout_warped_px": None if held_w is None else held_w.heldout_px}
+               "heldout_warped_px": None if held_w is None else held_w.heldout_px,
+               "decision": _warp_decision(used, held, held_w)}
     if not used:
         return sol, held, figures
     m = sol.keep
     return replace(warped, keep=tuple(m[j] for j in warped.keep), mismatched=sol.mismatched,
                    outliers=sol.outliers + tuple((m[j], a, b, c, why) for j, a, b, c, why in warped.outliers),
                    rejected_corners=tuple((m[j], a, b) for j, a, b in warped.rejected_corners)), held_w, figures
+
+
+def _warp_decision(used: bool, held: StereoHeldout | None, held_w: StereoHeldout | None) -> str:
+    """Why the bent board is used or not, in words."""
+    if held_w is None or held is None:
+        return (f"not used: within {BEND_SIGMAS:g} std of a flat board on both axes (not tested on held-out "
+                "pairs)") if held is not None else "not used: too few pairs for a held-out test"
+    errors = f"stereo held-out error {held_w.heldout_px:.3f} px bent, {held.heldout_px:.3f} px flat"
+    return f"used: it lowers the {errors}" if used else f"not used: it does not lower the {errors}"
 
 
 def merge_repeated_views(views: StereoViews) -> tuple[StereoViews, list[DroppedView]]:
