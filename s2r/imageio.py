@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.fileio import NotARegularFile, read_regular_file
-from s2r.profile import MAX_IMAGE_PX
+from s2r.limits import MAX_IMAGE_PX
 
 __all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log"]
 

@@ -27,6 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 
 from s2r._version import __version__
 from s2r.geometry import ORTHONORMAL_TOL, check_rotation, rotation_angle_rad
+from s2r.limits import MAX_IMAGE_PX, MIN_IMAGE_PX
 from s2r.sensor_model import SensorModel
 
 __all__ = [
@@ -63,9 +64,6 @@ DISTORTION_COEFFICIENTS: dict[str, int] = {"plumb_bob": 5, "rational_polynomial"
 #: publishes (W + 1) / 2, gz-sim W / 2.
 CENTRE_OFFSET_PX: dict[str, float] = {"gazebo-classic": 1.0, "gz-sim": 0.5, "exact": 0.0, "opencv": 0.0}
 
-#: Image side bounds, pixels. 16384 is above the largest sensors used for stereo (about 14000 px) and keeps the
-#: float32 rectification maps under 2 GiB; below 16 px no block matcher (5..21 px blocks) has room to work.
-MIN_IMAGE_PX, MAX_IMAGE_PX = 16, 16384
 #: Field-of-view bounds, degrees: a pinhole cannot image 180 deg (170 is about its useful limit; wider lenses
 #: use the equidistant model, up to 280 deg); 0.5 deg is narrower than a 1000 mm telephoto.
 MIN_FOV_DEG, MAX_PINHOLE_FOV_DEG, MAX_FISHEYE_FOV_DEG = 0.5, 170.0, 280.0

@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError,
 
 from s2r.errors import CalibrationError
 from s2r.fileio import parse_yaml, read_text_file
+from s2r.limits import MAX_SQUARE_M
 
 __all__ = [
     "ARUCO_DICTIONARIES",
@@ -184,11 +185,6 @@ class AprilGridTarget(_Target):
     def describe(self) -> str:
         return f"aprilgrid {self.tagCols}x{self.tagRows} tags of {self.tagSize * 1000:g} mm"
 
-
-#: Largest chessboard square (m) accepted from ``--square`` and by the board renderer: printed boards have
-#: squares of millimetres to ~0.2 m; beyond 2 m the value is millimetres or a typo, and 1e308 overflows the
-#: float32 board model.
-MAX_SQUARE_M = 2.0
 
 #: Any target a file can describe (the type every detector, solver and renderer takes).
 AnyTarget = CheckerboardTarget | CharucoTarget | AprilGridTarget

@@ -10,6 +10,7 @@ from typing import Any
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.errors import CalibrationError, terminal_safe
 from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
+from s2r.limits import MAX_SQUARE_M
 
 __all__ = ["register"]
 
@@ -110,8 +111,6 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not args.square > 0:
         raise CalibrationError(f"square size must be positive, got {args.square}", field="--square",
                                hint="give the square edge in metres, e.g. 0.025")
-    from s2r.targets import MAX_SQUARE_M  # local: the CLI does not build the target models at start-up
-
     if not args.square <= MAX_SQUARE_M:
         raise CalibrationError(f"square size {args.square:g} m is over {MAX_SQUARE_M:g} m", field="--square",
                                hint="--square is the square edge in metres; for 25 mm give --square 0.025")
@@ -132,8 +131,6 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``s2r calibrate``; returns the exit code."""
-    from s2r.formats.s2r_yaml import profile_to_yaml
-
     pattern = _check_args(args)
     lens, target = _lens_and_target(args, pattern)
     out = check_output_free(args.output, force=args.force)
@@ -146,16 +143,18 @@ def run(args: argparse.Namespace) -> int:
         "progress": ProgressBar(enabled=not (args.quiet or args.json)),
         "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
     }
-    from s2r.calib.solve.rig import SwappedCamerasError  # loads OpenCV: only when a calibration runs
-
     try:
         result = _solve(args, pattern, lens, target, common)
-    except SwappedCamerasError as exc:
-        if not args.swap:
+    except CalibrationError as exc:
+        from s2r.calib.solve.rig import SwappedCamerasError
+
+        if not isinstance(exc, SwappedCamerasError) or not args.swap:
             raise
         raise CalibrationError(exc.message, field=exc.field, path=exc.path,
                                hint="--swap already exchanged the images, so they were right as given: run without "
                                "--swap") from None
+    from s2r.formats.s2r_yaml import profile_to_yaml
+
     with OutputBatch(force=args.force) as batch:  # the profile and its report, both or neither
         batch.add_text(out, profile_to_yaml(result.profile))
         if args.report is not None:
@@ -205,11 +204,19 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
                                       **common)
     else:
         from s2r.calib.detect.inputs import find_stereo_pairs
-        from s2r.calib.solve.stereo import calibrate_stereo
+        from s2r.calib.detect.pairs import PairDetection
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
-        result = calibrate_stereo(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                  fix_intrinsics=args.fix_intrinsics, swap=args.swap, **common)
+        detection = PairDetection(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                                  swap=args.swap, pattern=pattern, jobs=args.jobs, cache_dir=common["cache_dir"],
+                                  progress=common["progress"])
+        try:  # the workers detect while the solver loads (about 0.2 s of a first run)
+            from s2r.calib.solve.stereo import calibrate_detected_pairs
+        except BaseException:
+            detection.cancel()
+            raise
+        solve = {k: v for k, v in common.items() if k not in ("pattern", "cache_dir")}
+        result = calibrate_detected_pairs(detection, fix_intrinsics=args.fix_intrinsics, **solve)
     return result
 
 

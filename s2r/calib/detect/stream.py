@@ -35,7 +35,6 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect import cache
 from s2r.calib.detect.chessboard import detect_board
-from s2r.calib.detect.markers import detect_target
 from s2r.calib.detect.workers import worker_pool
 from s2r.errors import S2RError
 from s2r.fileio import atomic_write_text
@@ -103,6 +102,8 @@ def _detect_item(item: DetectItem, pattern: tuple[int, int], target: AnyTarget |
         gray = item.source
     size = (int(gray.shape[1]), int(gray.shape[0]))
     if target is not None:
+        from s2r.calib.detect.markers import detect_target  # local: loads the target models (pydantic)
+
         found, name = detect_target(np.ascontiguousarray(gray, np.uint8), target)
         if found is None:
             return Detection(item.name, item.sha256, "no_board", size=size, detector=name,
@@ -175,9 +176,11 @@ class CornerCache:
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,
                   cache: CornerCache | None = None, total: int | None = None,
-                  progress: ProgressCallback | None = None, target: AnyTarget | None = None) -> Iterator[Detection]:
+                  progress: ProgressCallback | None = None, target: AnyTarget | None = None,
+                  pool: ProcessPoolExecutor | None = None) -> Iterator[Detection]:
     """Detect every item, in input order, over ``jobs`` worker processes (the ``target``'s corners with
-    their ids when given, else the ``pattern`` chessboard; a cache must then be made for that target).
+    their ids when given, else the ``pattern`` chessboard; a cache must then be made for that target); in
+    ``pool`` when given (the caller's, already started: it shuts it down), else in a pool of its own.
 
     Items are consumed lazily and at most ``4 * jobs`` are in flight, so images are never all in memory.
     Cache hits skip detection; each new result is written to the cache the moment its worker finishes.
@@ -185,7 +188,6 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
     pending: deque[Detection | Future[Detection]] = deque()
     window = max(1, 4 * jobs)
     done = 0
-    pool: ProcessPoolExecutor | None = None
     workers = contextlib.ExitStack()
 
     def store(fut: Future[Detection]) -> None:

@@ -215,14 +215,16 @@ def _names(lens: LensModel, warp: bool = False) -> list[str]:
 def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: JointInit, *, max_rounds: int = 6,
                 corner_k: float = 5.0, corner_floor_px: float = 0.3,
                 max_view_error_px: float | None = None, rel_tol: float = 1e-10,
-                covariance: bool = True, warp: bool = False, masks: Masks | None = None) -> JointSolution:
+                covariance: bool = True, warp: bool = False, masks: Masks | None = None,
+                max_iterations: int = 50) -> JointSolution:
     """Refine everything together from ``init`` (see the module docstring); ``init.rvecs[k]`` / ``tvecs[k]``
     is view k's board pose in the left camera. Views may miss one camera or show different corners.
     ``rel_tol``: LM stops when the sum of squares falls by less than this share (resampling solves, started
     from the full solution, use a looser one); ``covariance`` False skips the covariance (NaN; they need
     none); ``warp`` also solves the board's bend (two parameters, metres, see ``State.warp_basis``; the
     initial one from ``init.warp``); ``masks`` the starting inlier masks per view and camera (a warm start
-    from an earlier solve of these views: its rejected corners stay out; default every corner).
+    from an earlier solve of these views: its rejected corners stay out; default every corner);
+    ``max_iterations`` the LM steps per round (a warm start near the answer needs two or three).
 
     Raises:
         CalibrationError: fewer than 5 views, or the solve diverged (non-finite parameters).
@@ -236,14 +238,14 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     view_thr: float | None = None
     final: Residuals | None = None
     for _ in range(max_rounds):
-        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
+        _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol)
         changed, view_thr, res = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
                                          corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
         if not changed:
             final = res if len(res) == len(views) else None  # the state these residuals came from is final
             break
     else:
-        _levenberg_marquardt(state, views, masks, active, rel_tol=rel_tol)
+        _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol)
     if not np.all(np.isfinite(state.global_vec())):
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")

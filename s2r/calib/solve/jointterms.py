@@ -147,16 +147,16 @@ def rotations(rvecs: Sequence[FloatArray]) -> tuple[FloatArray, FloatArray]:
     return np.asarray(Rs, np.float64).reshape(-1, 3, 3), np.asarray(dRs, np.float64).reshape(-1, 3, 3, 3)
 
 
-def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, FloatArray, FloatArray]
-                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Residuals (M, 2) px, global Jacobian (M, 2, ng) and view Jacobian (M, 2, 6) of one camera's corners.
+def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, FloatArray, FloatArray], *,
+                 with_global: bool = True) -> tuple[FloatArray, FloatArray | None, FloatArray]:
+    """Residuals (M, 2) px, global Jacobian (M, 2, ng) (None without ``with_global``: pose-only fits) and view
+    Jacobian (M, 2, 6) of one camera's corners.
 
     Board points go to the camera frame here (the view's pose, then the pair's for the right camera) and are
     projected in one call with a zero pose, whose translation Jacobian is d pixel / d point. ``poses``: the
     active views' rotations (n, 3, 3), their derivatives (n, 3, 3, 3) and translations (n, 3)."""
     ni, nw = state.n_intr, state.nw
     e0 = 2 * ni + nw
-    ng = e0 + 6
     m = len(c.obj)
     R, dR, t = poses
     obj = c.obj
@@ -167,7 +167,6 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
         dX_dw = R[c.seg][:, :, 2:3] * basis[:, None, :]  # (M, 3, 2)
     X = (R[c.seg] @ obj[:, :, None])[:, :, 0] + t[c.seg]
     dX_dr = (dR[c.seg].reshape(m, 9, 3) @ obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
-    Jg = np.zeros((m, 2, ng))
     if cam == 1:
         R_lr, dR_lr = rotations([state.r_lr])
         dX_drlr = (X @ dR_lr[0].reshape(9, 3).T).reshape(m, 3, 3).transpose(0, 2, 1)
@@ -178,6 +177,11 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
     pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
     jac = jac.reshape(m, 2, -1)
     dp_dX = jac[:, :, 3:6]
+    dp_dt = dp_dX @ R_lr[0] if cam == 1 else dp_dX
+    Jv = np.concatenate([dp_dX @ dX_dr, dp_dt], axis=2)
+    if not with_global:
+        return pts.reshape(m, 2) - c.img, None, Jv
+    Jg = np.zeros((m, 2, e0 + 6))
     cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
     Jg[:, :, cam * ni:(cam + 1) * ni] = jac[:, :, cols]
     if nw:
@@ -185,10 +189,6 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
     if cam == 1:
         Jg[:, :, e0:e0 + 3] = dp_dX @ dX_drlr
         Jg[:, :, e0 + 3:] = dp_dX
-        dp_dt = dp_dX @ R_lr[0]
-    else:
-        dp_dt = dp_dX
-    Jv = np.concatenate([dp_dX @ dX_dr, dp_dt], axis=2)
     return pts.reshape(m, 2) - c.img, Jg, Jv
 
 
@@ -200,10 +200,11 @@ def padded(values: FloatArray, c: CornerSet, n: int) -> FloatArray:
 
 
 def normal_equations(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
-                      data: tuple[CornerSet | None, CornerSet | None] | None = None
-                      ) -> tuple[float, int, FloatArray, FloatArray, Blocks]:
+                     data: tuple[CornerSet | None, CornerSet | None] | None = None, *, poses_only: bool = False
+                     ) -> tuple[float, int, FloatArray, FloatArray, Blocks]:
     """SSR, residual count, A_gg, b_g and per active view (A_gv, A_vv, b_v); ``data``: the gathered corners
-    (:func:`prepare`) when the caller already has them."""
+    (:func:`prepare`) when the caller already has them; ``poses_only``: only the view blocks A_vv, b_v (the
+    global ones are zeros: for fitting board poses with everything else fixed)."""
     ng = 2 * state.n_intr + state.nw + 6
     n = len(active)
     A, b = np.zeros((ng, ng)), np.zeros(ng)
@@ -214,17 +215,18 @@ def normal_equations(state: State, views: Sequence[StereoObservation], masks: Ma
     for cam, c in enumerate(data if data is not None else prepare(views, masks, active)):
         if c is None:
             continue
-        r, Jg, Jv = camera_terms(state, cam, c, poses)
+        r, Jg, Jv = camera_terms(state, cam, c, poses, with_global=not poses_only)
         ssr += float(np.sum(r * r))
         count += r.size
-        Jg2 = Jg.reshape(-1, ng)
-        A += Jg2.T @ Jg2
-        b += Jg2.T @ r.reshape(-1)
-        Pg, Pv, Pr = padded(Jg, c, n), padded(Jv, c, n), padded(r[:, :, None], c, n)
+        Pv, Pr = padded(Jv, c, n), padded(r[:, :, None], c, n)
         PvT = Pv.transpose(0, 2, 1)
-        Agv += Pg.transpose(0, 2, 1) @ Pv
         Avv += PvT @ Pv
         bv += (PvT @ Pr)[:, :, 0]
+        if Jg is not None:
+            Jg2 = Jg.reshape(-1, ng)
+            A += Jg2.T @ Jg2
+            b += Jg2.T @ r.reshape(-1)
+            Agv += padded(Jg, c, n).transpose(0, 2, 1) @ Pv
     return ssr, count, A, b, (Agv, Avv, bv)
 
 
@@ -237,7 +239,7 @@ def all_residuals(state: State, views: Sequence[StereoObservation], ks: Sequence
     for cam, c in enumerate(prepare(views, None, ks)):
         if c is None:
             continue
-        r, _, _ = camera_terms(state, cam, c, poses)
+        r, _, _ = camera_terms(state, cam, c, poses, with_global=False)
         for j in np.unique(c.seg):
             out[ks[int(j)]][cam] = r[c.seg == j]
     return {k: (v[0], v[1]) for k, v in out.items()}

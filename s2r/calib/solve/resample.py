@@ -53,6 +53,10 @@ PARAMETERS = ("left fx", "left fy", "left cx", "left cy", "right fx", "right fy"
 _MIN_TRAIN = 5
 #: LM stopping rule of the warm-started fold solves (relative fall of the sum of squares).
 _FOLD_TOL = 1e-5
+#: LM steps per round of a fold solve: started from the full solution with its inlier corners, three steps
+#: reach the fold's optimum (held-out error within 0.1 % of a converged solve on three real sets; two steps read
+#: up to 0.6 % low and one step 1.4 % low: an under-fitted training set flatters the held-out error).
+_FOLD_ITERATIONS = 3
 
 
 @dataclass(frozen=True)
@@ -117,14 +121,14 @@ def _fit_poses(state: SolveState, views: Sequence[StereoObservation], masks: lis
     """Board poses of ``views`` (one per view, both cameras together) with the cameras and the pair fixed."""
     active = list(range(len(views)))
     lam = 1e-3
-    ssr, _, _, _, (_, Avv, bv) = normal_equations(state, views, masks, active)
+    ssr, _, _, _, (_, Avv, bv) = normal_equations(state, views, masks, active, poses_only=True)
     for _ in range(30):
         rv0, tv0 = state.copy_views()
         damp = lam * np.einsum("nii->ni", Avv)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
         dv = -np.linalg.solve(Avv + damp, bv[:, :, None])[:, :, 0]
         for k in active:
             state.rv[k], state.tv[k] = rv0[k] + dv[k, :3], tv0[k] + dv[k, 3:]
-        new_ssr, _, _, _, (_, new_Avv, new_bv) = normal_equations(state, views, masks, active)
+        new_ssr, _, _, _, (_, new_Avv, new_bv) = normal_equations(state, views, masks, active, poses_only=True)
         if np.isfinite(new_ssr) and new_ssr <= ssr:
             done = ssr - new_ssr < 1e-6 * max(ssr, 1e-12)
             ssr, Avv, bv, lam = new_ssr, new_Avv, new_bv, max(lam / 10, 1e-9)
@@ -176,7 +180,8 @@ def run_fold(task: FoldTask) -> FoldOutcome:
     nan = np.full((3, 3), np.nan)
     try:
         sol = solve_joint(task.train, task.lens, task.init, max_view_error_px=task.max_view_error_px,
-                          rel_tol=_FOLD_TOL, covariance=False, warp=task.warp, masks=task.masks)
+                          rel_tol=_FOLD_TOL, covariance=False, warp=task.warp, masks=task.masks,
+                          max_iterations=_FOLD_ITERATIONS)
     except (CalibrationError, np.linalg.LinAlgError, cv2.error) as exc:
         return FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed=str(exc))
     sq_in, sq_all = _heldout(task, sol)

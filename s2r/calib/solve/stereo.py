@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -14,8 +14,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
+from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
+from s2r.calib.detect.pairs import PairDetection, display_name
 from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.calib.solve.models import ModelComparison
@@ -41,7 +42,6 @@ from s2r.calib.solve.views import (
     too_few_error,
 )
 from s2r.errors import CalibrationError
-from s2r.fileio import sha256_file
 from s2r.profile import (
     CalibrationQuality,
     Camera,
@@ -56,8 +56,8 @@ from s2r.profile import (
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 
-__all__ = ["StereoCalibration", "ViewError", "board_text", "calibrate_stereo", "calibrate_stereo_detections",
-           "make_camera"]
+__all__ = ["StereoCalibration", "ViewError", "board_text", "calibrate_detected_pairs", "calibrate_stereo",
+           "calibrate_stereo_detections", "make_camera"]
 
 log = logging.getLogger(__name__)
 Corners = NDArray[np.float32]
@@ -336,22 +336,6 @@ def _stereo_profile(name: str, sol: PairSolution, pl: Sequence[Corners], pr: Seq
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
 
 
-def _file_items(left: Sequence[Path], right: Sequence[Path], hashes: dict[Path, str]) -> Iterator[DetectItem]:
-    for pl, pr in zip(left, right, strict=True):
-        for p in (pl, pr):
-            hashes[p] = sha256_file(p)
-            yield DetectItem(name=_display(p), sha256=hashes[p], source=p)
-
-
-def _display(path: Path) -> str:
-    return f"{path.parent.name}/{path.name}" if path.parent.name else path.name
-
-
-def _pairs_of(stream: Iterable[Detection], names: Sequence[str]) -> list[tuple[str, Detection, Detection]]:
-    it = iter(stream)
-    return [(name, next(it), next(it)) for name in names]
-
-
 def calibrate_stereo(
     left_paths: Sequence[Path], right_paths: Sequence[Path], *, pattern: tuple[int, int] = (9, 6),
     square_m: float = 0.025, name: str = "calibrated", distortion: str = DEFAULT_LENS,
@@ -375,27 +359,31 @@ def calibrate_stereo(
         CalibrationError: mixed sizes, no board at all (wrong pattern), fewer than MIN_VIEWS usable pairs,
             identical or mismatched pairs, swapped cameras, an implausible ``square_m``.
     """
-    if swap:
-        left_paths, right_paths = right_paths, left_paths
-    if len(left_paths) != len(right_paths):
-        raise CalibrationError(f"{len(left_paths)} left but {len(right_paths)} right images",
-                               hint="pass the same number of left and right images")
-    hashes: dict[Path, str] = {}
-    jobs = jobs or os.cpu_count() or 1
-    cache = CornerCache(cache_dir) if cache_dir is not None else None
-    stream = detect_stream(_file_items(left_paths, right_paths, hashes), pattern=pattern, jobs=jobs, cache=cache,
-                           total=2 * len(left_paths), progress=progress)
-    pairs = _pairs_of(stream, names if names is not None else [Path(p).stem for p in left_paths])
-    for p in unpaired:
+    detection = PairDetection(left_paths, right_paths, pattern=pattern, jobs=jobs, cache_dir=cache_dir,
+                              progress=progress, names=names, unpaired=unpaired, swap=swap)
+    return calibrate_detected_pairs(detection, square_m=square_m, name=name, distortion=distortion,
+                                    max_error_px=max_error_px, fix_intrinsics=fix_intrinsics, jobs=jobs,
+                                    progress=progress, compare=compare)
+
+
+def calibrate_detected_pairs(
+    detection: PairDetection, *, square_m: float, name: str = "calibrated", distortion: str = DEFAULT_LENS,
+    max_error_px: float | None = None, fix_intrinsics: bool = False, jobs: int | None = None,
+    progress: ProgressCallback | None = None, compare: bool = True,
+) -> StereoCalibration:
+    """:func:`calibrate_stereo` of a detection already started (the CLI starts it before loading the solver,
+    so both run at once); waits for it, then solves (options as :func:`calibrate_stereo`)."""
+    found = detection.result()
+    for p in found.unpaired:
         log.warning("%s has no partner image; skipped", p)
-    extra = [DroppedView(name=_display(Path(p)), reason="unpaired: no partner image") for p in unpaired]
-    sources = [SourceFile(path=str(p), sha256=hashes[p]) for p in (*left_paths, *right_paths)]
+    extra = [DroppedView(name=display_name(p), reason="unpaired: no partner image") for p in found.unpaired]
+    sources = [SourceFile(path=str(p), sha256=found.sha256[p]) for p in (*found.left, *found.right)]
     report(progress, 0, 1, "solving")
     result = calibrate_stereo_detections(
-        pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
-        fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra, compare=compare, jobs=jobs)
+        found.pairs, pattern=detection.pattern, square_m=square_m, name=name, distortion=distortion,
+        max_error_px=max_error_px, fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra,
+        compare=compare, jobs=jobs or os.cpu_count() or 1)
     report(progress, 1, 1, "solving")
-    first = result.used_names[0]
-    idx = [n for n, _, _ in pairs].index(first)
-    view_paths = {n: (Path(a), Path(b)) for (n, _, _), a, b in zip(pairs, left_paths, right_paths, strict=True)}
-    return replace(result, sample_paths=(Path(left_paths[idx]), Path(right_paths[idx])), view_paths=view_paths)
+    idx = [n for n, _, _ in found.pairs].index(result.used_names[0])
+    view_paths = {n: (a, b) for (n, _, _), a, b in zip(found.pairs, found.left, found.right, strict=True)}
+    return replace(result, sample_paths=(found.left[idx], found.right[idx]), view_paths=view_paths)
