@@ -51,7 +51,6 @@ from scipy.optimize import least_squares
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from s2r.calib import StereoCalibration, calibrate_stereo, find_stereo_pairs
-from s2r.errors import S2RError
 
 Arr = NDArray[np.float64]
 FOLDS = 4
@@ -218,8 +217,8 @@ def s2r_fold_models(pairs: Any, res: StereoCalibration, spec: SetSpec, cache: Pa
         try:
             r = run_s2r([pairs.left[i] for i in sel], [pairs.right[i] for i in sel], train, spec, cache,
                         compare=False)
-        except S2RError as exc:
-            notes.append(f"fold failed: {exc}")
+        except Exception as exc:  # s2r's own errors, and any crash: reported, the run goes on
+            notes.append(f"fold failed: {_why(exc)}")
             flat.append(None)
             warped.append(None)
             continue
@@ -281,6 +280,7 @@ def run_mrcal(python: str, res: StereoCalibration, left: Sequence[Arr], right: S
             rm, _ = cv2.Rodrigues(rt[:3])
             models.append(Model(ks[0], intr[0, 4:], ks[1], intr[1, 4:], rm, rt[3:], board))
         result[f"heldout_{variant}"] = fold_heldout(models, left, right)
+        result[f"jackknife_{variant}"] = jackknife([m.params9() for m in models]).tolist()
         result[f"rms_{variant}"] = float(d[f"{variant}_full_rms"])
         result[f"warp_mm_{variant}"] = [float(v) * 1000 for v in d[f"{variant}_full_warp"]]
     return result
@@ -312,8 +312,8 @@ def repeat_check(pairs: Any, spec: SetSpec, cache: Path, folder: Path, unique: d
     rp_ = find_stereo_pairs(folder)
     try:
         res = run_s2r(rp_.left, rp_.right, rp_.names, spec, cache)
-    except S2RError as exc:
-        return {"error": str(exc)}
+    except Exception as exc:  # s2r's own errors, and any crash: reported, the run goes on
+        return {"error": _why(exc)}
     stds = _reported(res)
     ratios = {n: stds[n] / unique[n] for n in NAMES9 if stds.get(n) and unique.get(n)}
     return {"ratios": ratios, "within_15pct": sum(abs(r - 1) <= 0.15 for r in ratios.values()),
@@ -348,7 +348,14 @@ def bench_set(spec: SetSpec, *, mrcal_python: str, repeat: bool) -> dict[str, An
         tmp = Path(tmpdir)
         cache = tmp / "cache"
         t0 = time.perf_counter()
-        res = run_s2r(pairs.left, pairs.right, pairs.names, spec, cache)
+        try:
+            res = run_s2r(pairs.left, pairs.right, pairs.names, spec, cache)
+        except Exception as exc:  # the plain figures are still worth printing
+            return {"set": spec.name, "error": _why(exc), "pairs": len(pairs.names), "size": list(size),
+                    "plain_boards": sum((a is not None) + (b is not None) for a, b in plain),
+                    "plain_jackknife": dict(zip(NAMES9, plain_jk.tolist(), strict=True)),
+                    "plain_values": dict(zip(NAMES9, plain_full.params9().tolist(), strict=True)),
+                    "plain_own_px": plain_own}
         t_s2r = time.perf_counter() - t0
         fig = res.figures()
         h = fig["stereo_heldout"] or {}
@@ -361,9 +368,12 @@ def bench_set(spec: SetSpec, *, mrcal_python: str, repeat: bool) -> dict[str, An
         s2r_full = s2r_model(res, board)
         sq_flat, sq_warp = fold_sq(flat, left, right), fold_sq(warped, left, right)
         params = h.get("parameters", {})
+        mrcal = run_mrcal(mrcal_python, res, left, right, spec, size, tmp)
+        mrcal_jk = mrcal.get("jackknife_warp", [None] * len(NAMES9))
         sigma = {n: {"value": float(s2r_full.params9()[i]), "plain_value": float(plain_full.params9()[i]),
                      "reported": params.get(n, {}).get("std"), "covariance": params.get(n, {}).get("std_covariance"),
-                     "s2r_jackknife": params.get(n, {}).get("std_jackknife"), "plain_jackknife": float(plain_jk[i])}
+                     "s2r_jackknife": params.get(n, {}).get("std_jackknife"), "plain_jackknife": float(plain_jk[i]),
+                     "mrcal_jackknife": mrcal_jk[i]}
                  for i, n in enumerate(NAMES9)}
         out: dict[str, Any] = {
             "set": spec.name, "folder": str(spec.folder), "pattern": list(spec.pattern), "square_m": spec.square,
@@ -377,7 +387,7 @@ def bench_set(spec: SetSpec, *, mrcal_python: str, repeat: bool) -> dict[str, An
             "script_s2r_warp_px": None if sq_warp is None else rms([sq_warp]),
             "script_s2r_flat_trimmed": trimmed(sq_flat), "script_s2r_warp_trimmed": trimmed(sq_warp),
             "script_opencv_px": fold_heldout(cv_models, left, right), "plain_own_px": plain_own,
-            "mrcal": run_mrcal(mrcal_python, res, left, right, spec, size, tmp),
+            "mrcal": mrcal,
         }
         if repeat:
             out["repeat"] = repeat_check(pairs, spec, cache, tmp / "repeat", _reported(res))
@@ -402,19 +412,24 @@ def report(r: dict[str, Any]) -> list[str]:
              f"s2r {r['time_s2r_s']:.1f} s, plain {r['time_plain_s']:.1f} s",
              f"- boards: plain finds {b['plain_boards']} of {b['images']} images; lost by s2r (not used, not "
              f"listed): {len(b['lost'])} {b['lost']}; dropped with a reason: {b['listed']}",
-             "", "| parameter | s2r | plain | reported σ | s2r jackknife | plain jackknife | σ/plain jk | σ/s2r jk |",
-             "|---|---|---|---|---|---|---|---|"]
-    ok_plain = ok_s2r = 0
+             "", "| parameter | s2r | plain | reported σ | s2r jackknife | plain jackknife | mrcal jackknife | "
+             "σ/plain jk | σ/mrcal jk | σ/s2r jk |", "|---|---|---|---|---|---|---|---|---|---|"]
+    ok_plain = ok_s2r = ok_mrcal = 0
     for n, s in r["sigma"].items():
         scale = 1000.0 if n == "baseline" else 1.0
         rp, rs = _ratio(s["reported"], s["plain_jackknife"]), _ratio(s["reported"], s["s2r_jackknife"])
+        rm = _ratio(s["reported"], s["mrcal_jackknife"])
         ok_plain += rp is not None and 0.5 <= rp <= 3
         ok_s2r += rs is not None and 0.5 <= rs <= 3
+        ok_mrcal += rm is not None and 0.5 <= rm <= 3
         sc = [None if v is None else v * scale for v in (s["value"], s["plain_value"], s["reported"],
-                                                           s["s2r_jackknife"], s["plain_jackknife"])]
+                                                           s["s2r_jackknife"], s["plain_jackknife"],
+                                                           s["mrcal_jackknife"])]
         lines.append(f"| {n}{' (mm)' if scale != 1 else ''} | {_f(sc[0], '.3f')} | {_f(sc[1], '.3f')} | "
-                     f"{_f(sc[2])} | {_f(sc[3])} | {_f(sc[4])} | {_f(rp, '.2f')} | {_f(rs, '.2f')} |")
-    lines.append(f"- σ ratio in [0.5, 3]: {ok_plain}/9 against plain OpenCV's jackknife, {ok_s2r}/9 against s2r's")
+                     f"{_f(sc[2])} | {_f(sc[3])} | {_f(sc[4])} | {_f(sc[5])} | {_f(rp, '.2f')} | {_f(rm, '.2f')} | "
+                     f"{_f(rs, '.2f')} |")
+    lines.append(f"- σ ratio in [0.5, 3]: {ok_plain}/9 against plain OpenCV's jackknife, {ok_mrcal}/9 against "
+                 f"mrcal's (warp, on s2r's corners), {ok_s2r}/9 against s2r's")
     m = r["mrcal"]
     js, sc = r["json_heldout_px"], r["script_s2r_flat_px"]
     sw = r["script_s2r_warp_px"]
@@ -446,6 +461,11 @@ def report(r: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _why(exc: BaseException) -> str:
+    lines = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {' / '.join(x.strip() for x in lines[:2])}"
+
+
 def _share(r: dict[str, Any], key: str) -> int:
     return sum(1 for s in r["sigma"].values()
                if (q := _ratio(s["reported"], s[key])) is not None and 0.5 <= q <= 3)
@@ -453,9 +473,9 @@ def _share(r: dict[str, Any], key: str) -> int:
 
 def summary(results: Sequence[dict[str, Any]]) -> list[str]:
     """One markdown row per set with the bars' figures."""
-    lines = ["| set | pairs | size | plain boards / lost | σ/plain jk in [0.5,3] | σ/s2r jk in [0.5,3] | "
+    lines = ["| set | pairs | size | plain boards / lost | σ/plain jk in [0.5,3] | σ/mrcal jk | σ/s2r jk | "
              "--json all / script | s2r / mrcal warp | s2r / OpenCV | repeat σ within 15 % (linked, noisy) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         if "error" in r:
             lines.append(f"| {r['set']} | s2r failed: {r['error']} |")
@@ -466,7 +486,8 @@ def summary(results: Sequence[dict[str, Any]]) -> list[str]:
         rep = ", ".join("-" if not x else f"{x.get('within_15pct')}/{len(x.get('ratios', {}))}" for x in reps)
         lines.append(
             f"| {r['set']} | {r['pairs']} | {r['size'][0]}x{r['size'][1]} | {r['boards']['plain_boards']} / "
-            f"{len(r['boards']['lost'])} | {_share(r, 'plain_jackknife')}/9 | {_share(r, 's2r_jackknife')}/9 | "
+            f"{len(r['boards']['lost'])} | {_share(r, 'plain_jackknife')}/9 | {_share(r, 'mrcal_jackknife')}/9 | "
+            f"{_share(r, 's2r_jackknife')}/9 | "
             f"{_f(_ratio(r['json_heldout_all_px'], sw), '.3f')} | {_f(_ratio(best, mw), '.3f')} | "
             f"{_f(_ratio(best, r['script_opencv_px']), '.3f')} | {rep} |")
     return lines
@@ -476,7 +497,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     ap.add_argument("sets", nargs="+", help="NAME=FOLDER:COLSxROWS:SQUARE_M")
     ap.add_argument("--mrcal-python", default="/usr/bin/python3", help="a python with mrcal (Debian's)")
-    ap.add_argument("--repeat", action="store_true", help="also run every set with each pair linked 3 times")
+    ap.add_argument("--repeat", action="store_true",
+                    help="also run every set with each pair 3 times (linked, then as noisy copies)")
     ap.add_argument("--json", type=Path, help="write every figure here too")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
@@ -484,11 +506,13 @@ def main(argv: list[str] | None = None) -> int:
     for spec in (parse_spec(s) for s in args.sets):
         try:
             r = bench_set(spec, mrcal_python=args.mrcal_python, repeat=args.repeat)
-        except S2RError as exc:
-            print(f"## {spec.name}: s2r failed: {exc}\n", flush=True)
-            results.append({"set": spec.name, "error": str(exc)})
-            continue
+        except Exception as exc:  # s2r's own errors, and any crash: reported, the run goes on
+            r = {"set": spec.name, "error": _why(exc)}
         results.append(r)
+        if "error" in r:
+            print(f"## {spec.name}: s2r failed: {r['error']}\n{ {k: v for k, v in r.items() if k != 'error'} }\n",
+                  flush=True)
+            continue
         print("\n".join(report(r)) + "\n", flush=True)
     print("\n".join(summary(results)))
     if args.json:
