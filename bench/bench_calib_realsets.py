@@ -370,10 +370,11 @@ def bench_set(spec: SetSpec, *, mrcal_python: str, repeat: bool) -> dict[str, An
         params = h.get("parameters", {})
         mrcal = run_mrcal(mrcal_python, res, left, right, spec, size, tmp)
         mrcal_jk = mrcal.get("jackknife_warp", [None] * len(NAMES9))
+        cv_jk = jackknife([m.params9() for m in cv_models])
         sigma = {n: {"value": float(s2r_full.params9()[i]), "plain_value": float(plain_full.params9()[i]),
                      "reported": params.get(n, {}).get("std"), "covariance": params.get(n, {}).get("std_covariance"),
                      "s2r_jackknife": params.get(n, {}).get("std_jackknife"), "plain_jackknife": float(plain_jk[i]),
-                     "mrcal_jackknife": mrcal_jk[i]}
+                     "mrcal_jackknife": mrcal_jk[i], "opencv_s2r_corners_jackknife": float(cv_jk[i])}
                  for i, n in enumerate(NAMES9)}
         out: dict[str, Any] = {
             "set": spec.name, "folder": str(spec.folder), "pattern": list(spec.pattern), "square_m": spec.square,
@@ -414,7 +415,7 @@ def report(r: dict[str, Any]) -> list[str]:
              f"listed): {len(b['lost'])} {b['lost']}; dropped with a reason: {b['listed']}",
              "", "| parameter | s2r | plain | reported σ | s2r jackknife | plain jackknife | mrcal jackknife | "
              "σ/plain jk | σ/mrcal jk | σ/s2r jk |", "|---|---|---|---|---|---|---|---|---|---|"]
-    ok_plain = ok_s2r = ok_mrcal = 0
+    ok_plain = ok_s2r = ok_mrcal = ok_cv = 0
     for n, s in r["sigma"].items():
         scale = 1000.0 if n == "baseline" else 1.0
         rp, rs = _ratio(s["reported"], s["plain_jackknife"]), _ratio(s["reported"], s["s2r_jackknife"])
@@ -422,6 +423,8 @@ def report(r: dict[str, Any]) -> list[str]:
         ok_plain += rp is not None and 0.5 <= rp <= 3
         ok_s2r += rs is not None and 0.5 <= rs <= 3
         ok_mrcal += rm is not None and 0.5 <= rm <= 3
+        rc = _ratio(s["reported"], s["opencv_s2r_corners_jackknife"])
+        ok_cv += rc is not None and 0.5 <= rc <= 3
         sc = [None if v is None else v * scale for v in (s["value"], s["plain_value"], s["reported"],
                                                            s["s2r_jackknife"], s["plain_jackknife"],
                                                            s["mrcal_jackknife"])]
@@ -429,7 +432,8 @@ def report(r: dict[str, Any]) -> list[str]:
                      f"{_f(sc[2])} | {_f(sc[3])} | {_f(sc[4])} | {_f(sc[5])} | {_f(rp, '.2f')} | {_f(rm, '.2f')} | "
                      f"{_f(rs, '.2f')} |")
     lines.append(f"- σ ratio in [0.5, 3]: {ok_plain}/9 against plain OpenCV's jackknife, {ok_mrcal}/9 against "
-                 f"mrcal's (warp, on s2r's corners), {ok_s2r}/9 against s2r's")
+                 f"mrcal's (warp, on s2r's corners), {ok_cv}/9 against OpenCV's on s2r's corners, "
+                 f"{ok_s2r}/9 against s2r's")
     m = r["mrcal"]
     js, sc = r["json_heldout_px"], r["script_s2r_flat_px"]
     sw = r["script_s2r_warp_px"]
@@ -473,9 +477,10 @@ def _share(r: dict[str, Any], key: str) -> int:
 
 def summary(results: Sequence[dict[str, Any]]) -> list[str]:
     """One markdown row per set with the bars' figures."""
-    lines = ["| set | pairs | size | plain boards / lost | σ/plain jk in [0.5,3] | σ/mrcal jk | σ/s2r jk | "
+    lines = ["| set | pairs | size | plain boards / lost | σ/plain jk in [0.5,3] | σ/mrcal jk | "
+             "σ/OpenCV jk (s2r corners) | σ/s2r jk | "
              "--json all / script | s2r / mrcal warp | s2r / OpenCV | repeat σ within 15 % (linked, noisy) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         if "error" in r:
             lines.append(f"| {r['set']} | s2r failed: {r['error']} |")
@@ -487,6 +492,7 @@ def summary(results: Sequence[dict[str, Any]]) -> list[str]:
         lines.append(
             f"| {r['set']} | {r['pairs']} | {r['size'][0]}x{r['size'][1]} | {r['boards']['plain_boards']} / "
             f"{len(r['boards']['lost'])} | {_share(r, 'plain_jackknife')}/9 | {_share(r, 'mrcal_jackknife')}/9 | "
+            f"{_share(r, 'opencv_s2r_corners_jackknife')}/9 | "
             f"{_share(r, 's2r_jackknife')}/9 | "
             f"{_f(_ratio(r['json_heldout_all_px'], sw), '.3f')} | {_f(_ratio(best, mw), '.3f')} | "
             f"{_f(_ratio(best, r['script_opencv_px']), '.3f')} | {rep} |")
