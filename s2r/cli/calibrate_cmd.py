@@ -291,6 +291,9 @@ def _print_honest(figures: dict[str, Any]) -> None:
         state = "used: it lowers" if warp["used"] else "not used: it does not lower"
         print(f"  board bend x {warp['warp_mm'][0]:+.3f}{sd[0]} mm, y {warp['warp_mm'][1]:+.3f}{sd[1]} mm ({state} the "
               f"stereo held-out error, {warp['heldout_flat_px']:.3f} px flat, {warp['heldout_warped_px']:.3f} px bent)")
+    mono = figures.get("heldout")
+    if mono:
+        _print_mono_honest(mono)
     held = figures.get("stereo_heldout")
     if not held:
         return
@@ -299,5 +302,15 @@ def _print_honest(figures: dict[str, Any]) -> None:
           f"{held['corners_total']} corners rejected)")
     params = held["parameters"]
     jk = [n for n, p in params.items() if p["std_source"] == "jackknife"]
+    print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
+          + (", ".join(jk) if jk else "none") + " (both in --json)")
+
+
+def _print_mono_honest(held: dict[str, Any]) -> None:
+    """One camera: the held-out error over views left out, and where each std comes from."""
+    print(f"  held-out error {held['heldout_px']:.3f} px over the corners of views left out ({held['folds']} folds, "
+          f"one board pose per view; {held['heldout_all_px']:.3f} px over all, {held['corners_rejected']} of "
+          f"{held['corners_total']} corners in views beyond the training threshold)")
+    jk = [n for n, p in held["parameters"].items() if p["std_source"] == "jackknife"]
     print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
           + (", ".join(jk) if jk else "none") + " (both in --json)")

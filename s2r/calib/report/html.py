@@ -205,10 +205,10 @@ def _honest_lines(result: StereoCalibration) -> list[str]:
     return list(out)
 
 
-def _std_table(result: StereoCalibration) -> str:
+def _std_table(result: StereoCalibration | MonoCalibration) -> str:
     h = result.heldout
     if h is None:
-        return "<p class='note'>too few pairs for the jackknife: std from the covariance only</p>"
+        return "<p class='note'>too few views for the jackknife: std from the covariance only</p>"
     rows = [[s.name, s.value, s.covariance, s.jackknife, s.source] for s in h.stds]
     return html_table(["parameter (px; baseline m; rotation deg)", "value", "std (covariance)",
                        f"std ({h.folds}-fold jackknife)", "reported"], rows,
@@ -279,13 +279,20 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     cam = result.profile.camera
     q = result.profile.provenance.calibration
     assert q is not None
+    h = result.heldout
+    held = [] if h is None else [
+        f"Held-out error {h.heldout_px:.3f} px over the corners of views left out of the fit ({h.folds} folds; one "
+        f"board pose per held-out view), {h.heldout_all_px:.3f} px over all ({h.corners_rejected} of "
+        f"{h.corners_total} corners in views beyond the training solve's threshold)."]
     summary = ReportSection("Summary", paragraphs=[(
-        f"Board: {_board(q.pattern, q.square_m)}. "
+        f"Board: {result.board or _board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
-        + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
-        tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])
-    names = list(result.view_names) + [d.name for d in result.dropped if d.rms_px is not None]
-    errs = list(result.view_errors_px) + [float(d.rms_px) for d in result.dropped if d.rms_px is not None]
+        + held + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
+        tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam)),
+                _std_table(result)])
+    outliers = [d for d in result.dropped if d.rms_px is not None and d.reason.startswith("outlier")]
+    names = list(result.view_names) + [d.name for d in outliers]
+    errs = list(result.view_errors_px) + [float(d.rms_px) for d in outliers if d.rms_px is not None]
     used = [True] * len(result.view_names) + [False] * (len(names) - len(result.view_names))
     sections = [_verdict_section(result), summary,
                 ReportSection("Lens model comparison", tables=[_models_table(result)]),
