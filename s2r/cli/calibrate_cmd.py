@@ -220,7 +220,7 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
               distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
     if args.mono:
         from s2r.calib.detect.inputs import find_mono_images
-        from s2r.calib.solve.target_stereo import calibrate_mono_target
+        from s2r.calib.solve.target_mono import calibrate_mono_target
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",

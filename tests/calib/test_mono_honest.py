@@ -1,14 +1,23 @@
 """`calibrate --mono` honest on independent known-answer views: a held-out error over 4 folds (checked against
-plain OpenCV on the same corners), the jackknife std beside the covariance's, repeated views merged."""
+plain OpenCV on the same corners), the jackknife std beside the covariance's, repeated views merged; the same
+for one camera with a ``--target`` board or a fisheye lens (partial views)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+from typing import Any
+
 import cv2
 import numpy as np
+import pytest
+import yaml
 from numpy.typing import NDArray
 
 from s2r.calib.detect import Detection
 from s2r.calib.solve.mono import MonoCalibration, calibrate_mono_detections
+from s2r.calib.solve.target_mono import calibrate_mono_target_detections
+from s2r.targets import target_from_mapping
+from tests import raycast as rc
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, board_points, make_rig
 
 Array = NDArray[np.float64]
@@ -100,6 +109,54 @@ def test_every_view_three_times_keeps_the_std() -> None:
     one, three = _calibrate(rig.left), _calibrate(tripled)
     repeats = [d for d in three.dropped if d.reason.startswith("repeat of")]
     assert len(repeats) == 24 and len(three.view_names) == len(one.view_names) == 12
+    assert any("repeat an earlier view" in w for w in three.warnings)
+    a, b = one.profile.camera.std, three.profile.camera.std
+    assert a is not None and b is not None
+    for name in ("fx_px", "fy_px", "cx_px", "cy_px"):
+        assert abs(getattr(b, name) / getattr(a, name) - 1) < 0.15, name
+
+
+def _target_views(kind: str, views: int, seed: int) -> tuple[list[Detection], Any, Any]:
+    """Corner detections (with ids, partial views cut by the image edge) of the left camera of tests/raycast.py's
+    independent rigs, noise 0.1 px per coordinate: the views, the s2r target and the true lens."""
+    rig = rc.fisheye_rig(rc.chessboard_target((8, 6), 0.03, 48), "f", 0.6) if kind == "fisheye" else \
+        rc.pinhole_rig(rc.charuco_target((9, 7), 0.035, 0.026, "DICT_4X4_50", 60), "c", 0.75)
+    tg, lens = rig.target, rig.left
+    rng = np.random.default_rng(seed)
+    dets = []
+    for k, (R, t, _cut) in enumerate(rc.sample_poses(rig, views, seed=seed)):
+        X = tg.points @ R.T + t
+        seen = rc._visible(lens, X)
+        uv = lens.project(X[seen]) + rng.normal(0.0, 0.1, (int(seen.sum()), 2))
+        dets.append(Detection(f"cam/{k:02d}", "", "ok", size=(lens.width, lens.height), corners=uv.astype(np.float32),
+                              ids=tg.ids[seen].astype(np.int32)))
+    return dets, target_from_mapping(yaml.safe_load(tg.yaml)), lens
+
+
+@pytest.mark.parametrize("kind", ["fisheye", "charuco"])
+def test_target_and_fisheye_mono_have_a_heldout_error_and_both_std(kind: str) -> None:
+    dets, target, lens = _target_views(kind, 16, 4)
+    assert any(len(d.corners) < target.corner_count for d in dets if d.corners is not None)  # partial views
+    res = calibrate_mono_target_detections(dets, target=target, lens="fisheye" if kind == "fisheye" else "pinhole")
+    fig = res.figures()
+    held = fig["heldout"]
+    assert held["folds"] == 4 and not held["failed_folds"]
+    assert 0.12 < held["heldout_px"] < 0.16  # 0.1 px per coordinate
+    std = res.profile.camera.std
+    assert std is not None and fig["board"] == target.describe()
+    for name, true in (("fx", lens.fx), ("fy", lens.fy), ("cx", lens.cx), ("cy", lens.cy)):
+        p = held["parameters"][name]
+        assert p["std"] == max(p["std_covariance"], p["std_jackknife"]) == getattr(std, f"{name}_px")
+        assert abs(p["value"] - true) <= 4 * p["std"], name
+    assert res.verdict is not None and any(r.text.startswith("held-out error") for r in res.verdict.reasons)
+
+
+def test_target_mono_merges_repeated_views() -> None:
+    dets, target, _ = _target_views("charuco", 10, 6)
+    tripled = [replace(d, name=f"{d.name}-{k}") for d in dets for k in range(3)]
+    one = calibrate_mono_target_detections(dets, target=target)
+    three = calibrate_mono_target_detections(tripled, target=target)
+    assert sum(d.reason.startswith("repeat of") for d in three.dropped) == 20
     assert any("repeat an earlier view" in w for w in three.warnings)
     a, b = one.profile.camera.std, three.profile.camera.std
     assert a is not None and b is not None

@@ -21,7 +21,6 @@ from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
 from s2r.calib.solve.lens import DEFAULT_LENS
-from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
@@ -45,12 +44,12 @@ from s2r.calib.solve.targetcal import (
 from s2r.calib.solve.verdict import stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
-from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
+from s2r.profile import DroppedView, Extrinsics, Provenance, SourceFile, StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 from s2r.targets import AnyTarget, CheckerboardTarget
 
-__all__ = ["calibrate_mono_target", "calibrate_stereo_target", "calibrate_stereo_target_detections"]
+__all__ = ["calibrate_stereo_target", "calibrate_stereo_target_detections"]
 
 log = logging.getLogger(__name__)
 _STEREO_ROUNDS = 4
@@ -323,42 +322,3 @@ def calibrate_stereo_target(
                                                                           Path(right_paths[idx]))
     return StereoCalibration(**{**result.__dict__, "sample_paths": sample,
                                 "detection_cached": sum(d.cached for d in dets)})
-
-
-def calibrate_mono_target(
-    paths: Sequence[Path], *, target: AnyTarget, lens: str = "pinhole", distortion: str = DEFAULT_LENS,
-    name: str = "calibrated", max_error_px: float | None = None, jobs: int | None = None,
-    cache_dir: Path | None = None, progress: ProgressCallback | None = None,
-) -> MonoCalibration:
-    """Calibrate one camera from image files of ``target`` (partial views used) through ``lens``."""
-    hashes: dict[Path, str] = {}
-    dets = _detect(paths, target, jobs=jobs, cache_dir=cache_dir, progress=progress, hashes=hashes)
-    size = check_sizes(dets)
-    obs = observations(dets, target)
-    if not any(o is not None for o in obs):
-        raise no_target_error(sum(d.status != "unreadable" for d in dets), target)
-    skipped = _skipped(dets, obs)
-    index = [k for k, o in enumerate(obs) if o is not None]
-    if len(index) < MIN_VIEWS:
-        raise too_few_error(len(index), skipped, what="images")
-    views = [o for o in obs if o is not None]
-    fit = fit_camera(CameraViews(views, size, lens, distortion, not isinstance(target, CheckerboardTarget)),
-                     max_error_px=max_error_px, camera="the")
-    used = [views[i] for i in fit.keep]
-    cov = coverage_of([v.img for v in views], size)
-    spread = centred_spread(fit.solution, used, target, size)
-    dropped = (*skipped, *fit.outliers)
-    quality = quality_of(target, lens=lens, distortion=distortion, views_used=len(used), views_dropped=dropped,
-                         views_detected=len(views), rms_left_px=fit.solution.rms_px, coverage_left=cov.fraction,
-                         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m)
-    profile = MonoProfile(name=name, camera=to_camera(fit.solution, size, lens=lens, distortion=distortion),
-                          provenance=Provenance(origin="real", method=_method(lens, False), calibration=quality,
-                                                sources=tuple(SourceFile(path=str(p), sha256=h)
-                                                              for p, h in hashes.items())))
-    warnings = coverage_warnings("the", cov, spread)
-    for w in warnings:
-        log.warning("%s", w)
-    return MonoCalibration(profile=profile, view_names=tuple(v.name for v in used),
-                           view_errors_px=tuple(float(e) for e in fit.solution.per_view_px), dropped=dropped,
-                           threshold_px=fit.threshold, coverage=cov, spread=spread, warnings=tuple(warnings),
-                           corners=tuple(v.img for v in used), sample_path=Path(paths[index[fit.keep[0]]]))
