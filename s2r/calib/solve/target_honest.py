@@ -6,6 +6,10 @@ for one camera the held-out error with the jackknife std beside the covariance's
   so the standard deviations count each board pose once.
 - **One camera**: :func:`s2r.calib.solve.mono_resample.mono_heldout` over the solved views (partial views,
   either lens), the training solve's corner rule applied to held-out corners where the solve drops corners.
+- **A pair (joint solve)**: the stereo path's folds (:mod:`s2r.calib.solve.resample`: joint solve of the
+  training views warm-started from the full one; one board pose per held-out view fitted to both cameras) on
+  the views matched by corner id, with the jackknife std of every parameter of ``PARAMETERS`` beside the
+  covariance's.
 """
 
 from __future__ import annotations
@@ -13,14 +17,22 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
+import cv2
 import numpy as np
+from numpy.typing import NDArray
 
+from s2r.calib.solve.heldout import ParameterStd, StereoHeldout
+from s2r.calib.solve.joint import JointInit
+from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
+from s2r.calib.solve.observations import StereoObservation
+from s2r.calib.solve.pair import PairSolution
+from s2r.calib.solve.resample import PARAMETERS, FoldOutcome, FoldTask, jackknife_std, run_folds, split_folds
 from s2r.calib.solve.targetcal import CORNER_OUTLIER_FACTOR, MonoFit, Observation
 from s2r.calib.solve.views import REPEAT_PX
 from s2r.profile import DroppedView
 
-__all__ = ["merge_repeat_observations", "merge_repeat_pairs", "mono_fit_heldout"]
+__all__ = ["merge_repeat_observations", "merge_repeat_pairs", "mono_fit_heldout", "pair_heldout"]
 
 
 def _distance(a: Observation | None, b: Observation | None) -> float:
@@ -71,3 +83,52 @@ def mono_fit_heldout(fit: MonoFit, size: tuple[int, int], *, lens: str, distorti
     if held is None:
         return fit, None
     return replace(fit, solution=replace(fit.solution, std=reported_std(fit.solution.std, held))), held
+
+
+def _fold_tasks(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel,
+                max_error_px: float | None) -> list[FoldTask]:
+    tasks = []
+    for test in split_folds(len(obs)):
+        held = set(test)
+        train = [i for i in range(len(obs)) if i not in held]
+        init = JointInit(sol.K1, sol.D1, sol.K2, sol.D2, sol.R, sol.T, [sol.rvecs[i] for i in train],
+                         [sol.tvecs[i] for i in train])
+        tasks.append(FoldTask(lens, tuple(obs[i] for i in train), tuple(obs[i] for i in test), init,
+                              tuple(sol.rvecs[i] for i in test), tuple(sol.tvecs[i] for i in test), max_error_px))
+    return tasks
+
+
+def _rms(parts: Sequence[NDArray[np.float64]]) -> float:
+    sq = np.concatenate(parts) if parts else np.zeros(0)
+    return float(np.sqrt(np.mean(sq))) if sq.size else float("nan")
+
+
+def _finite(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
+
+
+def _summary(outcomes: Sequence[FoldOutcome], sol: PairSolution) -> StereoHeldout:
+    good = [o for o in outcomes if not o.failed]
+    jk = jackknife_std(outcomes, sol.R)
+    rot = float(np.degrees(np.linalg.norm(np.asarray(cv2.Rodrigues(sol.R)[0], np.float64))))
+    values = [sol.K1[0, 0], sol.K1[1, 1], sol.K1[0, 2], sol.K1[1, 2], sol.K2[0, 0], sol.K2[1, 1], sol.K2[0, 2],
+              sol.K2[1, 2], float(np.linalg.norm(sol.T)), rot]
+    cov = [*sol.std_left[:4], *sol.std_right[:4], sol.baseline_std_m, sol.rotation_std_deg]
+    stds = tuple(ParameterStd(n, float(v), _finite(float(c)), _finite(float(j)))
+                 for n, v, c, j in zip(PARAMETERS, values, cov, jk, strict=True))
+    n_in, n_all = sum(o.sq_inlier.size for o in good), sum(o.sq_all.size for o in good)
+    return StereoHeldout(len(outcomes), _rms([o.sq_inlier for o in good]), _rms([o.sq_all for o in good]),
+                         n_all - n_in, n_all, tuple(_rms([o.sq_inlier]) for o in good), stds,
+                         tuple(o.failed for o in outcomes if o.failed))
+
+
+def pair_heldout(joint_obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel, *,
+                 max_error_px: float | None, jobs: int) -> StereoHeldout | None:
+    """The stereo held-out error and both std devs of a joint solve ``sol`` of ``joint_obs`` (its used views
+    ``sol.keep``, in the order of its board poses); None with too few views for two folds."""
+    obs = [joint_obs[i] for i in sol.keep]
+    tasks = _fold_tasks(obs, sol, lens, max_error_px)
+    if not tasks:
+        return None
+    outcomes, _ = run_folds(tasks, jobs=jobs)
+    return _summary(outcomes, sol)

@@ -20,10 +20,13 @@ import numpy as np
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
+from s2r.calib.solve.heldout import StereoHeldout
 from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
+from s2r.calib.solve.stereo_figures import repeat_warning, with_reported_std
+from s2r.calib.solve.target_honest import merge_repeat_pairs, pair_heldout
 from s2r.calib.solve.target_joint import joint_solve, lens_model_of
 from s2r.calib.solve.targetcal import (
     CameraViews,
@@ -142,9 +145,10 @@ def calibrate_stereo_target_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, target: AnyTarget, lens: str = "pinhole",
     distortion: str = DEFAULT_LENS, name: str = "calibrated", max_error_px: float | None = None,
     fix_intrinsics: bool = False, swap: bool = False, sources: Sequence[SourceFile] = (),
-    extra_dropped: Sequence[DroppedView] = (),
+    extra_dropped: Sequence[DroppedView] = (), jobs: int = 1,
 ) -> StereoCalibration:
-    """Solve a stereo calibration from per-image detections with corner ids (see the module docstring)."""
+    """Solve a stereo calibration from per-image detections with corner ids (see the module docstring);
+    ``jobs``: processes of the held-out folds."""
     if swap:
         pairs = [(n, dr, dl) for n, dl, dr in pairs]
     size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
@@ -155,6 +159,9 @@ def calibrate_stereo_target_detections(
         raise no_target_error(sum(d.status != "unreadable" for _, dl, dr in pairs for d in (dl, dr)), target)
     dropped = [*extra_dropped, *_skipped([dl for _, dl, _ in pairs], obs_l),
                *_skipped([dr for _, _, dr in pairs], obs_r)]
+    unique, repeats = merge_repeat_pairs(names, obs_l, obs_r)
+    names, obs_l, obs_r = [names[i] for i in unique], [obs_l[i] for i in unique], [obs_r[i] for i in unique]
+    dropped += repeats
     (fit_l, fit_r), keeps = _mono_fits(obs_l, obs_r, size, lens=lens, distortion=distortion,
                                        max_error_px=max_error_px, dropped=dropped,
                                        prune=not isinstance(target, CheckerboardTarget))
@@ -165,21 +172,30 @@ def calibrate_stereo_target_detections(
         solved = _stereo_rounds(views, fit_l, fit_r, size, lens=lens, distortion=distortion,
                                 max_error_px=max_error_px)
         dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in solved.outliers]
-        return _fixed_result(solved, fit_l, fit_r, size, target=target, lens=lens, distortion=distortion,
-                             name=name, sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
-                             detected=len(names))
+        fixed = _fixed_result(solved, fit_l, fit_r, size, target=target, lens=lens, distortion=distortion,
+                              name=name, sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
+                              detected=len(names) + len(repeats))
+        return replace(fixed, warnings=(*_logged(repeat_warning(repeats)), *fixed.warnings))
     joint_obs, sol = joint_solve(names, obs_l, obs_r, keeps, fit_l, fit_r, views, lens=lens,
                                   distortion=distortion, max_error_px=max_error_px)
-    return _joint_result(joint_obs, sol, views, size, target=target, lens=lens, distortion=distortion, name=name,
-                         sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
-                         detected=len(names), fit_l=fit_l)
+    held = pair_heldout(joint_obs, sol, lens_model_of(lens, distortion), max_error_px=max_error_px, jobs=jobs)
+    result = _joint_result(joint_obs, with_reported_std(sol, held), views, size, target=target, lens=lens,
+                           distortion=distortion, name=name, sources=sources, dropped=dropped, reordered=reordered,
+                           obs=(obs_l, obs_r), detected=len(names) + len(repeats), fit_l=fit_l, heldout=held)
+    return replace(result, warnings=(*_logged(repeat_warning(repeats)), *result.warnings))
+
+
+def _logged(warnings: list[str]) -> list[str]:
+    for w in warnings:
+        log.warning("%s", w)
+    return warnings
 
 
 def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: Sequence[PairView],
                   size: tuple[int, int], *, target: AnyTarget, lens: str, distortion: str, name: str,
                   sources: Sequence[SourceFile], dropped: list[DroppedView], reordered: list[str],
                   obs: tuple[list[Observation | None], list[Observation | None]], detected: int,
-                  fit_l: MonoFit) -> StereoCalibration:
+                  fit_l: MonoFit, heldout: StereoHeldout | None = None) -> StereoCalibration:
     model = lens_model_of(lens, distortion)
     used = {joint_obs[i].name for i in sol.keep}
     outliers = [ViewError(joint_obs[i].name, a, b, c, used=False, reason=why) for i, a, b, c, why in sol.outliers]
@@ -212,7 +228,8 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         log.warning("%s", w)
     view_errors = [ViewError(joint_obs[i].name, float(e[0]), float(e[1]), float(e[2]), used=True)
                    for i, e in zip(sol.keep, sol.per_view, strict=True)]
-    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None, epipolar_px=epi, baseline_m=profile.baseline_m,
+    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None if heldout is None else heldout.heldout_px,
+                             epipolar_px=epi, baseline_m=profile.baseline_m,
                              baseline_std_m=profile.extrinsics.baseline_std_m,
                              coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable)
     # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
@@ -227,7 +244,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         used_names=tuple(joint_obs[i].name for i in sol.keep),
         corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
         corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
-        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe())
+        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe(), heldout=heldout)
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
@@ -315,7 +332,7 @@ def calibrate_stereo_target(
         pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
         fix_intrinsics=fix_intrinsics, swap=swap,
         sources=[SourceFile(path=str(p), sha256=h) for p, h in hashes.items()],
-        extra_dropped=extra)
+        extra_dropped=extra, jobs=jobs or os.cpu_count() or 1)
     report(progress, 1, 1, "solving")
     idx = labels.index(result.used_names[0])
     sample = (Path(right_paths[idx]), Path(left_paths[idx])) if swap else (Path(left_paths[idx]),

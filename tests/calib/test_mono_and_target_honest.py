@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import Detection
 from s2r.calib.solve.mono import MonoCalibration, calibrate_mono_detections
 from s2r.calib.solve.target_mono import calibrate_mono_target_detections
+from s2r.calib.solve.target_stereo import calibrate_stereo_target_detections
 from s2r.targets import target_from_mapping
 from tests import raycast as rc
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, board_points, make_rig
@@ -116,27 +117,42 @@ def test_every_view_three_times_keeps_the_std() -> None:
         assert abs(getattr(b, name) / getattr(a, name) - 1) < 0.15, name
 
 
-def _target_views(kind: str, views: int, seed: int) -> tuple[list[Detection], Any, Any]:
-    """Corner detections (with ids, partial views cut by the image edge) of the left camera of tests/raycast.py's
-    independent rigs, noise 0.1 px per coordinate: the views, the s2r target and the true lens."""
+def _target_pairs(kind: str, views: int, seed: int) -> tuple[list[tuple[str, Detection, Detection]], Any, Any]:
+    """Corner detections with ids of both cameras of tests/raycast.py's independent rigs, noise 0.1 px per
+    coordinate (a ChArUco board's views cut by the image edge are partial; a chessboard cut is not found, as a
+    detector finds it): the pairs, the s2r target and the rig."""
     rig = rc.fisheye_rig(rc.chessboard_target((8, 6), 0.03, 48), "f", 0.6) if kind == "fisheye" else \
         rc.pinhole_rig(rc.charuco_target((9, 7), 0.035, 0.026, "DICT_4X4_50", 60), "c", 0.75)
-    tg, lens = rig.target, rig.left
+    tg = rig.target
     rng = np.random.default_rng(seed)
-    dets = []
+    pairs = []
     for k, (R, t, _cut) in enumerate(rc.sample_poses(rig, views, seed=seed)):
         X = tg.points @ R.T + t
-        seen = rc._visible(lens, X)
-        uv = lens.project(X[seen]) + rng.normal(0.0, 0.1, (int(seen.sum()), 2))
-        dets.append(Detection(f"cam/{k:02d}", "", "ok", size=(lens.width, lens.height), corners=uv.astype(np.float32),
-                              ids=tg.ids[seen].astype(np.int32)))
-    return dets, target_from_mapping(yaml.safe_load(tg.yaml)), lens
+        dets = []
+        for side, lens, pts in (("left", rig.left, X), ("right", rig.right, X @ rig.R.T + rig.T)):
+            seen = rc._visible(lens, pts)
+            size = (lens.width, lens.height)
+            if kind == "fisheye" and not seen.all():
+                dets.append(Detection(f"{side}/{k:02d}", "", "no_board", size=size))
+                continue
+            uv = lens.project(pts[seen]) + rng.normal(0.0, 0.1, (int(seen.sum()), 2))
+            dets.append(Detection(f"{side}/{k:02d}", "", "ok", size=size, corners=uv.astype(np.float32),
+                                  ids=tg.ids[seen].astype(np.int32)))
+        pairs.append((f"{k:02d}", dets[0], dets[1]))
+    return pairs, target_from_mapping(yaml.safe_load(tg.yaml)), rig
+
+
+def _target_views(kind: str, views: int, seed: int) -> tuple[list[Detection], Any, Any]:
+    """The left camera's detections of :func:`_target_pairs`, the target and the left lens."""
+    pairs, target, rig = _target_pairs(kind, views, seed)
+    return [a for _, a, _ in pairs], target, rig.left
 
 
 @pytest.mark.parametrize("kind", ["fisheye", "charuco"])
 def test_target_and_fisheye_mono_have_a_heldout_error_and_both_std(kind: str) -> None:
     dets, target, lens = _target_views(kind, 16, 4)
-    assert any(len(d.corners) < target.corner_count for d in dets if d.corners is not None)  # partial views
+    if kind == "charuco":
+        assert any(len(d.corners) < target.corner_count for d in dets if d.corners is not None)  # partial views
     res = calibrate_mono_target_detections(dets, target=target, lens="fisheye" if kind == "fisheye" else "pinhole")
     fig = res.figures()
     held = fig["heldout"]
@@ -162,3 +178,28 @@ def test_target_mono_merges_repeated_views() -> None:
     assert a is not None and b is not None
     for name in ("fx_px", "fy_px", "cx_px", "cy_px"):
         assert abs(getattr(b, name) / getattr(a, name) - 1) < 0.15, name
+
+
+@pytest.mark.parametrize("kind", ["fisheye", "charuco"])
+def test_target_pair_has_a_stereo_heldout_error_both_std_and_merges_repeats(kind: str) -> None:
+    pairs, target, rig = _target_pairs(kind, 14, 4)
+    lens = "fisheye" if kind == "fisheye" else "pinhole"
+    res = calibrate_stereo_target_detections(pairs, target=target, lens=lens)
+    held = res.figures()["stereo_heldout"]
+    assert held is not None and held["folds"] == 4 and not held["failed_folds"]
+    assert 0.12 < held["heldout_px"] < 0.17  # 0.1 px per coordinate
+    params = held["parameters"]
+    for name, p in params.items():
+        assert p["std"] == max(p["std_covariance"], p["std_jackknife"]), name
+    assert res.profile.extrinsics.baseline_std_m == params["baseline"]["std"]
+    assert abs(res.profile.baseline_m - float(np.linalg.norm(rig.T))) <= 4 * params["baseline"]["std"]
+    assert abs(res.profile.left.fx_px - rig.left.fx) <= 4 * params["left fx"]["std"]
+    assert res.verdict is not None and any("held-out error" in r.text for r in res.verdict.reasons)
+    tripled = [(f"{n}-{k}", replace(a, name=f"{a.name}-{k}"), replace(b, name=f"{b.name}-{k}"))
+               for n, a, b in pairs for k in range(3)]
+    three = calibrate_stereo_target_detections(tripled, target=target, lens=lens)
+    seen = sum(a.status == "ok" or b.status == "ok" for _, a, b in pairs)
+    assert sum(d.reason.startswith("repeat of") for d in three.dropped) == 2 * seen
+    assert any("repeat an earlier view" in w for w in three.warnings)
+    sa, sb = res.profile.extrinsics.baseline_std_m, three.profile.extrinsics.baseline_std_m
+    assert sa and sb and abs(sb / sa - 1) < 0.15
