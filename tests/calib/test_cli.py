@@ -95,6 +95,7 @@ def test_mono_calibration_writes_a_camera_profile(synthetic_set: tuple[Path, Ste
         "covariance", "jackknife")
     assert figures["board"] == "chessboard 9x6 inner corners, 25 mm squares" and "Held-out error" in html
     assert "chessboard 9x6 inner corners, 25 mm squares" in html and "4-fold jackknife" in html
+    assert "Projection uncertainty" in html and figures["projection_uncertainty"]["camera"]["covariance"]
 
 
 def test_prefixed_files_and_globs_pair_by_number(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,

@@ -69,6 +69,9 @@ def test_heldout_error_matches_plain_opencv_and_drives_the_verdict() -> None:
     assert res.verdict is not None
     assert any(r.text.startswith(f"held-out error {held['heldout_px']:.3f} px") for r in res.verdict.reasons)
     assert res.figures()["board"] == "chessboard 9x6 inner corners, 25 mm squares"
+    maps = res.figures()["projection_uncertainty"]["camera"]
+    for src in ("covariance", "jackknife"):  # the centre is known better than the corners
+        assert maps[src]["source"] == src and 0 < maps[src]["centre_px"] < maps[src]["corner_px"] < 3.0
 
 
 def test_both_std_reported_the_larger_and_about_equal_on_a_clean_set() -> None:

@@ -28,6 +28,7 @@ from s2r.calib.report.plots import (
     thumbnail_strip,
 )
 from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.projection import ProjectionMap
 from s2r.calib.solve.stereo import StereoCalibration
 from s2r.calib.solve.synth import board_object_points
 from s2r.fileio import OutputBatch
@@ -216,6 +217,21 @@ def _std_table(result: StereoCalibration | MonoCalibration) -> str:
                       left=[0, 4])
 
 
+def _projection_section(projection: dict[str, dict[str, ProjectionMap | None]], size: tuple[int, int]
+                        ) -> list[ReportSection]:
+    """The projection uncertainty maps and their figures (none when neither map exists)."""
+    if not any(m is not None for maps in projection.values() for m in maps.values()):
+        return []
+    rows = [[side, src, m.centre_px, m.corner_px] for side, maps in projection.items()
+            for src, m in maps.items() if m is not None]
+    return [ReportSection("Projection uncertainty", paragraphs=[(
+        "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
+        "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
+        images=[("projection uncertainty over the image (the larger of the two)",
+                 projection_uncertainty(projection, size))],
+        tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])])]
+
+
 def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
     p = result.profile
     q = p.provenance.calibration
@@ -252,15 +268,7 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
                 {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
             ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
                                                  board_object_points(q.pattern, q.square_m), p.R, p.T))]))
-    if any(m is not None for maps in result.projection.values() for m in maps.values()):
-        rows = [[side, src, m.centre_px, m.corner_px] for side, maps in result.projection.items()
-                for src, m in maps.items() if m is not None]
-        sections.append(ReportSection("Projection uncertainty", paragraphs=[(
-            "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
-            "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
-            images=[("projection uncertainty over the image (the larger of the two)",
-                     projection_uncertainty(result.projection, size))],
-            tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])]))
+    sections += _projection_section(result.projection, size)
     sections.append(ReportSection("Coverage", paragraphs=[(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
@@ -301,6 +309,7 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
         tables=[_dropped_table(result)]),
         ReportSection("Coverage", images=[("views whose board covers each part of the image", coverage_maps(
             {"camera": result.coverage}, result.profile.camera.image_size))])]
+    sections += _projection_section(result.projection, result.profile.camera.image_size)
     sample = _sample(result)
     if sample is not None:
         sections.append(ReportSection("Detection", images=[

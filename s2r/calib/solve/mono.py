@@ -18,7 +18,9 @@ from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverag
 from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.models import ModelComparison, compare_models
+from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
+from s2r.calib.solve.projection import ProjectionMap
 from s2r.calib.solve.stereo import make_camera
 from s2r.calib.solve.stereo_figures import board_text, dropped_warning, repeat_warning
 from s2r.calib.solve.synth import board_object_points
@@ -53,6 +55,7 @@ class MonoCalibration:
     verdict: Verdict | None = None
     heldout: MonoHeldout | None = None
     board: str = ""
+    projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
 
     def figures(self) -> dict[str, Any]:
         """The figures as JSON-ready values (what ``--json`` prints)."""
@@ -73,6 +76,8 @@ class MonoCalibration:
             "model_comparison": None if self.models is None else self.models.as_dict(),
             "board": self.board,
             "heldout": None if self.heldout is None else self.heldout.as_dict(),
+            "projection_uncertainty": {side: {src: None if m is None else m.as_dict() for src, m in maps.items()}
+                                       for side, maps in self.projection.items()},
         }
 
 
@@ -179,4 +184,6 @@ def calibrate_mono_detections(dets: Sequence[Detection], *, pattern: tuple[int, 
                            view_errors_px=tuple(float(e) for e in sol.per_view_px), dropped=dropped,
                            threshold_px=thr, coverage=cov, spread=spread, warnings=tuple(warnings),
                            corners=tuple(used), models=models, verdict=verdict, heldout=held,
-                           board=board_text(pattern, square_m))
+                           board=board_text(pattern, square_m),
+                           projection={"camera": mono_projection([obj] * len(used), used, sol, held, size,
+                                                                 distortion=distortion)})

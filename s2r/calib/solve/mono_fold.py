@@ -54,14 +54,16 @@ class MonoFoldTask:
 
 @dataclass(frozen=True)
 class MonoFoldOutcome:
-    """A fold's training intrinsics (fx, fy, cx, cy px) and its held-out corners' squared errors (px^2):
-    ``sq_inlier`` of the corners the training rules keep, ``sq_all`` of every held-out corner; ``failed``
-    says why the fold has none."""
+    """A fold's training intrinsics (fx, fy, cx, cy px; and K, D) and its held-out corners' squared errors
+    (px^2): ``sq_inlier`` of the corners the training rules keep, ``sq_all`` of every held-out corner;
+    ``failed`` says why the fold has none."""
 
     params: FloatArray
     sq_inlier: FloatArray
     sq_all: FloatArray
     failed: str = ""
+    K: FloatArray | None = None
+    D: FloatArray | None = None
 
 
 def _project(obj: Points, rv: FloatArray, tv: FloatArray, K: FloatArray, D: FloatArray, lens: str
@@ -175,4 +177,4 @@ def run_mono_fold(task: MonoFoldTask) -> MonoFoldOutcome:
         if float(np.sqrt(np.mean(sq))) <= thr:
             inl.append(sq[np.sqrt(sq) <= corner])
     return MonoFoldOutcome(np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2]]),
-                           np.concatenate(inl) if inl else np.zeros(0), np.concatenate(every))
+                           np.concatenate(inl) if inl else np.zeros(0), np.concatenate(every), K=K, D=D)

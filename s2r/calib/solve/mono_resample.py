@@ -45,7 +45,8 @@ MONO_PARAMETERS = ("fx", "fy", "cx", "cy")
 class MonoHeldout:
     """The held-out error over ``folds`` folds (px per corner): over the inlier views' corners (``heldout_px``,
     the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of ``corners_total`` left out
-    by the training solve's view rule; per fold; fx, fy, cx, cy with both standard deviations."""
+    by the training solve's view rule; per fold; fx, fy, cx, cy with both standard deviations; the folds'
+    intrinsics (K, D) (for the projection uncertainty)."""
 
     folds: int
     heldout_px: float
@@ -55,6 +56,7 @@ class MonoHeldout:
     folds_px: tuple[float, ...]
     stds: tuple[ParameterStd, ...]
     failed: tuple[str, ...] = ()
+    fold_intrinsics: tuple[tuple[FloatArray, FloatArray], ...] = ()
 
     def std(self, name: str) -> ParameterStd:
         """The entry of one of ``MONO_PARAMETERS``."""
@@ -129,7 +131,8 @@ def mono_heldout(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolution
     n_all = sum(o.sq_all.size for o in good)
     held_out = MonoHeldout(len(outcomes), _rms([o.sq_inlier for o in good]), _rms([o.sq_all for o in good]),
                            n_all - n_in, n_all, tuple(_rms([o.sq_inlier]) for o in good), stds,
-                           tuple(o.failed for o in outcomes if o.failed))
+                           tuple(o.failed for o in outcomes if o.failed),
+                           tuple((o.K, o.D) for o in good if o.K is not None and o.D is not None))
     return held_out, extra
 
 

@@ -18,6 +18,7 @@ from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.stereo_figures import dropped_warning, repeat_warning
 from s2r.calib.solve.target_honest import merge_repeat_observations, mono_fit_heldout
 from s2r.calib.solve.target_stereo import _detect, _method, _skipped
@@ -97,4 +98,6 @@ def calibrate_mono_target_detections(
                            view_errors_px=tuple(float(e) for e in fit.solution.per_view_px), dropped=dropped,
                            threshold_px=fit.threshold, coverage=cov, spread=spread, warnings=tuple(warnings),
                            corners=tuple(v.img for v in used), verdict=verdict, heldout=held,
-                           board=target.describe())
+                           board=target.describe(), projection={} if lens == "fisheye" else {"camera": mono_projection(
+                               [v.obj for v in used], [v.img for v in used], fit.solution, held, size,
+                               distortion=distortion)})
