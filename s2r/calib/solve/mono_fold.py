@@ -22,7 +22,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import DISTORTION_CHOICES, INIT_CRITERIA, outlier_threshold
-from s2r.calib.solve.fisheye import solve_mono_fisheye
 
 __all__ = ["MonoFoldOutcome", "MonoFoldTask", "run_mono_fold"]
 
@@ -82,6 +81,8 @@ def _calibrate(obj: Sequence[Points], img: Sequence[Points], task: MonoFoldTask,
     """K, D and each view's corner errors (px) of one training solve, warm-started from ``start`` when given."""
     if task.lens == "fisheye":
         if start is None:
+            from s2r.calib.solve.fisheye import solve_mono_fisheye  # scipy: loaded only for a fisheye lens
+
             sol = solve_mono_fisheye(obj, img, task.size).solution
             K, D, rvecs, tvecs = sol.K, sol.D, list(sol.rvecs), list(sol.tvecs)
         else:
