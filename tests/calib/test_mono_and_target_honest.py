@@ -206,3 +206,15 @@ def test_target_pair_has_a_stereo_heldout_error_both_std_and_merges_repeats(kind
     assert any("repeat an earlier view" in w for w in three.warnings)
     sa, sb = res.profile.extrinsics.baseline_std_m, three.profile.extrinsics.baseline_std_m
     assert sa and sb and abs(sb / sa - 1) < 0.15
+
+
+def test_lens_models_compared_on_the_same_folds_flag_a_missing_k3() -> None:
+    """A lens with k3 = 0.2 (not in the default k1k2p1p2): plumb_bob's held-out error is clearly lower."""
+    rig = make_rig(32, views=16, noise_px=0.05, k3_max=0.3)
+    res = calibrate_mono_detections(_dets(rig.left), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1)
+    assert res.models is not None and res.heldout is not None
+    scores = {s.model: s for s in res.models.scores}
+    assert set(scores) == {"k1k2p1p2", "k1k2", "plumb_bob", "rational"}
+    assert scores["k1k2p1p2"].heldout_px == pytest.approx(res.heldout.heldout_px)  # the same folds
+    assert res.models.best == "plumb_bob" and res.models.warning and "--distortion plumb_bob" in res.models.warning
+    assert res.verdict is not None and res.verdict.level != "good"

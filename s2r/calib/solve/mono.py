@@ -6,7 +6,6 @@ import logging
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +15,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
-from s2r.calib.solve.lens import DEFAULT_LENS
+from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS
 from s2r.calib.solve.models import ModelComparison, compare_models
 from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
@@ -151,10 +150,10 @@ def calibrate_mono_detections(dets: Sequence[Detection], *, pattern: tuple[int, 
     keep, sol, thr, outliers = _solve_with_outliers(names, corners, obj, size, pattern=pattern,
                                                     distortion=distortion, max_error_px=max_error_px)
     used = [corners[i] for i in keep]
-    side = partial(compare_models, used, None, obj, size, chosen=distortion, guess=((sol.K, sol.D), (sol.K, sol.D))) \
-        if compare else None
     held, models = mono_heldout([obj] * len(used), used, sol, size, distortion=distortion,
-                                max_error_px=max_error_px, jobs=jobs, side=side)
+                                max_error_px=max_error_px, jobs=jobs, compare=tuple(LENS_MODELS) if compare else ())
+    if held is None and compare:  # too few views for the folds: the leave-views-out comparison alone
+        models = compare_models(used, None, obj, size, chosen=distortion, guess=((sol.K, sol.D), (sol.K, sol.D)))
     std = reported_std(sol.std, held)
     cov = coverage_of(used, size)
     spread = pose_spread(sol.rvecs, sol.tvecs, used, pattern=pattern, square_m=square_m, size=size)

@@ -21,13 +21,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import MonoSolution
 from s2r.calib.solve.heldout import ParameterStd
+from s2r.calib.solve.lens import LENS_MODELS
+from s2r.calib.solve.models import CLEARLY_BETTER, ModelComparison, ModelScore
 from s2r.calib.solve.mono_fold import MonoFoldOutcome, MonoFoldTask, run_mono_fold
 from s2r.calib.solve.resample import FOLDS, split_folds
 from s2r.executor import local_pool
@@ -36,9 +37,11 @@ __all__ = ["MONO_PARAMETERS", "MonoHeldout", "jackknife", "mono_heldout", "repor
 
 FloatArray = NDArray[np.float64]
 Points = NDArray[np.float32]
-T = TypeVar("T")
 #: Parameters whose jackknife std is reported, in this order (px).
 MONO_PARAMETERS = ("fx", "fy", "cx", "cy")
+#: Most views (evenly spaced) on which the lens models are compared (as the stereo path): the comparison needs
+#: the models' relative held-out errors, and this bounds its cost; the chosen model's figures use every view.
+MAX_COMPARE_VIEWS = 16
 
 
 @dataclass(frozen=True)
@@ -70,18 +73,58 @@ class MonoHeldout:
                 "parameters": {s.name: s.as_dict() for s in self.stds}}
 
 
-def _run(tasks: Sequence[MonoFoldTask], jobs: int, side: Callable[[], T] | None) -> tuple[list[MonoFoldOutcome],
-                                                                                          T | None]:
-    """Every task over ``jobs`` processes (in this process when 1), and ``side()`` run here meanwhile."""
+def _run(tasks: Sequence[MonoFoldTask], jobs: int) -> list[MonoFoldOutcome]:
+    """Every task over ``jobs`` processes of s2r's pool (in this process when 1)."""
     if jobs <= 1 or len(tasks) <= 1:
-        return [run_mono_fold(t) for t in tasks], None if side is None else side()
+        return [run_mono_fold(t) for t in tasks]
     pool = local_pool(min(jobs, len(tasks)))
     try:
-        futures = [pool.submit(run_mono_fold, t) for t in tasks]
-        extra = None if side is None else side()
-        return [f.result() for f in futures], extra
+        return list(pool.map(run_mono_fold, tasks))
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _start(D: FloatArray, model: str) -> FloatArray:
+    """The chosen model's coefficients as a start for ``model``: the terms ``model`` frees, the others 0 (a
+    rational start gives none to a polynomial model: its k1..k3 are tied to the denominator)."""
+    lens = LENS_MODELS[model]
+    out = np.zeros(lens.n_coef)
+    src = np.asarray(D, np.float64).reshape(-1)
+    if len(src) <= lens.n_coef:
+        for i in lens.free:
+            if i < len(src):
+                out[i] = src[i]
+    return out
+
+
+def _tasks(obj: Sequence[Points], img: Sequence[Points], idx: Sequence[int], folds: int,
+           fold_task: Callable[[Sequence[int], list[int]], MonoFoldTask]) -> list[MonoFoldTask]:
+    """One task per fold over the views ``idx`` (interleaved): ``fold_task(train, test)`` of view indices."""
+    out = []
+    for test in split_folds(len(idx), folds):
+        held = [idx[k] for k in test]
+        out.append(fold_task([i for i in idx if i not in set(held)], held))
+    return out
+
+
+def _comparison(scored: dict[str, Sequence[MonoFoldOutcome]], chosen: str) -> ModelComparison:
+    """Each model's held-out error on the same folds, the best one, and a warning when it is clearly better."""
+    scores = []
+    for name, outs in scored.items():
+        ok = all(not o.failed for o in outs)
+        scores.append(ModelScore(name, _rms([o.sq_inlier for o in outs]) if ok else float("inf"),
+                                 tuple(_rms([o.sq_inlier]) if not o.failed else float("inf") for o in outs),
+                                 name == chosen))
+    best = min(scores, key=lambda sc: sc.heldout_px)
+    mine = next(sc for sc in scores if sc.chosen)
+    warning = None
+    if best is not mine and best.heldout_px < CLEARLY_BETTER * mine.heldout_px:
+        wins = sum(b < c for b, c in zip(best.folds_px, mine.folds_px, strict=True))
+        if wins >= len(best.folds_px) - 1:
+            warning = (f"held-out views favour --distortion {best.model}: {best.heldout_px:.3f} px against "
+                       f"{mine.heldout_px:.3f} px for {chosen} (lower in {wins} of {len(best.folds_px)} folds); "
+                       f"consider rerunning with --distortion {best.model}")
+    return ModelComparison(tuple(scores), best.model, warning)
 
 
 def _rms(parts: Sequence[FloatArray]) -> float:
@@ -105,35 +148,53 @@ def jackknife(outcomes: Sequence[MonoFoldOutcome]) -> FloatArray:
 
 def mono_heldout(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolution, size: tuple[int, int], *,
                  distortion: str, max_error_px: float | None = None, jobs: int = 1, folds: int = FOLDS,
-                 side: Callable[[], T] | None = None, lens: str = "pinhole", corner_factor: float | None = None
-                 ) -> tuple[MonoHeldout | None, T | None]:
+                 compare: Sequence[str] = (), lens: str = "pinhole", corner_factor: float | None = None
+                 ) -> tuple[MonoHeldout | None, ModelComparison | None]:
     """The held-out error and both std devs of the solved camera ``sol`` (its used views ``obj``/``img``), and
-    ``side()`` (e.g. the lens-model comparison) run in this process while the folds run in the pool. None (and
-    ``side()``) when there are too few views for two folds. ``lens``: ``pinhole`` or ``fisheye``;
-    ``corner_factor``: the solve's single-corner rule (see :mod:`s2r.calib.solve.mono_fold`)."""
-    groups = split_folds(len(img), folds)
-    if not groups:
-        return None, None if side is None else side()
-    tasks = []
-    for test in groups:
-        held = set(test)
-        train = [i for i in range(len(img)) if i not in held]
-        tasks.append(MonoFoldTask(tuple(obj[i] for i in train), tuple(img[i] for i in train),
-                                  tuple(obj[i] for i in test), tuple(img[i] for i in test), sol.K, sol.D,
-                                  distortion, size, max_error_px, lens, corner_factor))
-    outcomes, extra = _run(tasks, jobs, side)
-    good = [o for o in outcomes if not o.failed]
-    jk = jackknife(outcomes)
+    the lens models of ``compare`` scored on the same folds (on at most ``MAX_COMPARE_VIEWS`` evenly spaced
+    views, every model on the same ones; None without another model). None, None when there are too few views
+    for two folds. ``lens``: ``pinhole`` or ``fisheye``; ``corner_factor``: the solve's single-corner rule (see
+    :mod:`s2r.calib.solve.mono_fold`)."""
+    n = len(img)
+    if not split_folds(n, folds):
+        return None, None
+
+    def for_model(model: str) -> Callable[[Sequence[int], list[int]], MonoFoldTask]:
+        D = sol.D if model == distortion else _start(sol.D, model)  # another model: its terms of the solution
+
+        def fold_task(train: Sequence[int], test: list[int]) -> MonoFoldTask:
+            return MonoFoldTask(tuple(obj[i] for i in train), tuple(img[i] for i in train),
+                                tuple(obj[i] for i in test), tuple(img[i] for i in test), sol.K, D, model, size,
+                                max_error_px, lens, corner_factor)
+        return fold_task
+
+    tasks = _tasks(obj, img, range(n), folds, for_model(distortion))
+    k = len(tasks)
+    others = [m for m in compare if m != distortion and m in LENS_MODELS] if lens == "pinhole" else []
+    sub = [int(v) for v in np.unique(np.linspace(0, n - 1, min(n, MAX_COMPARE_VIEWS)).round())]
+    small = len(sub) < n and bool(others)
+    for m in ([distortion] if small else []) + others:
+        tasks += _tasks(obj, img, sub, folds, for_model(m))
+    outcomes = _run(tasks, jobs)
+    mine, rest = outcomes[:k], outcomes[k:]
+    good = [o for o in mine if not o.failed]
+    jk = jackknife(mine)
     values = (sol.K[0, 0], sol.K[1, 1], sol.K[0, 2], sol.K[1, 2])
-    stds = tuple(ParameterStd(n, float(v), _finite(float(c)), _finite(float(j)))
-                 for n, v, c, j in zip(MONO_PARAMETERS, values, sol.std[:4], jk, strict=True))
-    n_in = sum(o.sq_inlier.size for o in good)
-    n_all = sum(o.sq_all.size for o in good)
-    held_out = MonoHeldout(len(outcomes), _rms([o.sq_inlier for o in good]), _rms([o.sq_all for o in good]),
-                           n_all - n_in, n_all, tuple(_rms([o.sq_inlier]) for o in good), stds,
-                           tuple(o.failed for o in outcomes if o.failed),
+    stds = tuple(ParameterStd(name, float(v), _finite(float(c)), _finite(float(j)))
+                 for name, v, c, j in zip(MONO_PARAMETERS, values, sol.std[:4], jk, strict=True))
+    n_in, n_all = sum(o.sq_inlier.size for o in good), sum(o.sq_all.size for o in good)
+    held_out = MonoHeldout(k, _rms([o.sq_inlier for o in good]), _rms([o.sq_all for o in good]), n_all - n_in,
+                           n_all, tuple(_rms([o.sq_inlier]) for o in good), stds,
+                           tuple(o.failed for o in mine if o.failed),
                            tuple((o.K, o.D) for o in good if o.K is not None and o.D is not None))
-    return held_out, extra
+    if not others:
+        return held_out, None
+    ks = len(rest) // (len(others) + small)
+    names = ([distortion] if small else []) + others
+    scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate(names)}
+    if not small:
+        scored[distortion] = mine
+    return held_out, _comparison({m: scored[m] for m in LENS_MODELS if m in scored}, distortion)
 
 
 def reported_std(std: FloatArray, held: MonoHeldout | None) -> FloatArray:
