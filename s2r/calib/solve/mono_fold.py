@@ -167,11 +167,10 @@ def run_mono_fold(task: MonoFoldTask) -> MonoFoldOutcome:
         K, D, thr, corner = _train(task)
     except (cv2.error, np.linalg.LinAlgError) as exc:
         return MonoFoldOutcome(np.full(4, np.nan), np.zeros(0), np.zeros(0), failed=str(exc).strip()[-200:])
-    inl, every = [], []
+    inl, every = [], [np.zeros(0)]
     for obj, img in zip(task.test_obj, task.test_img, strict=True):
         pose = _pose(obj, img, K, D, task.lens)
-        if pose is None:
-            every.append(np.full(len(obj), np.inf))
+        if pose is None:  # no pose at all (solvePnP failed): nothing to measure
             continue
         sq = np.sum((_project(obj, pose[0], pose[1], K, D, task.lens)[0] - img.reshape(-1, 2)) ** 2, axis=1)
         every.append(sq)
