@@ -227,7 +227,7 @@ def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[s
               distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
     if args.mono:
         from s2r.calib.detect.inputs import find_mono_images
-        from s2r.calib.solve.target_stereo import calibrate_mono_target
+        from s2r.calib.solve.target_mono import calibrate_mono_target
 
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
@@ -297,6 +297,9 @@ def _print_honest(figures: dict[str, Any]) -> None:
         sd = [f"±{v:.2g}" if v is not None else "±?" for v in warp["warp_std_mm"]]
         print(f"  board bend x {warp['warp_mm'][0]:+.3f}{sd[0]} mm, y {warp['warp_mm'][1]:+.3f}{sd[1]} mm "
               f"({warp['decision']})")
+    mono = figures.get("heldout")
+    if mono:
+        _print_mono_honest(mono)
     held = figures.get("stereo_heldout")
     if not held:
         return
@@ -305,5 +308,15 @@ def _print_honest(figures: dict[str, Any]) -> None:
           f"{held['corners_total']} corners rejected)")
     params = held["parameters"]
     jk = [n for n, p in params.items() if p["std_source"] == "jackknife"]
+    print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
+          + (", ".join(jk) if jk else "none") + " (both in --json)")
+
+
+def _print_mono_honest(held: dict[str, Any]) -> None:
+    """One camera: the held-out error over views left out, and where each std comes from."""
+    print(f"  held-out error {held['heldout_px']:.3f} px over the corners of views left out ({held['folds']} folds, "
+          f"one board pose per view; {held['heldout_all_px']:.3f} px over all, {held['corners_rejected']} of "
+          f"{held['corners_total']} corners in views beyond the training threshold)")
+    jk = [n for n, p in held["parameters"].items() if p["std_source"] == "jackknife"]
     print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "
           + (", ".join(jk) if jk else "none") + " (both in --json)")

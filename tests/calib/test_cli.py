@@ -88,6 +88,14 @@ def test_mono_calibration_writes_a_camera_profile(synthetic_set: tuple[Path, Ste
     assert figures["verdict"]["level"] in ("good", "check", "poor") and figures["verdict"]["reasons"]
     models = figures["model_comparison"]["models"]
     assert [m["model"] for m in models if m["chosen"]] == ["k1k2p1p2"] and all(m["heldout_px"] > 0 for m in models)
+    # the held-out error over 4 folds and both std (the larger written to the profile) are in --json
+    held = figures["heldout"]
+    assert held["folds"] == 4 and 0 < held["heldout_px"] <= held["heldout_all_px"]
+    assert cam.std.fx_px == held["parameters"]["fx"]["std"] and held["parameters"]["fx"]["std_source"] in (
+        "covariance", "jackknife")
+    assert figures["board"] == "chessboard 9x6 inner corners, 25 mm squares" and "Held-out error" in html
+    assert "chessboard 9x6 inner corners, 25 mm squares" in html and "4-fold jackknife" in html
+    assert "Projection uncertainty" in html and figures["projection_uncertainty"]["camera"]["covariance"]
 
 
 def test_prefixed_files_and_globs_pair_by_number(synthetic_set: tuple[Path, StereoProfile], tmp_path: Path,

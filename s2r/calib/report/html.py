@@ -28,6 +28,7 @@ from s2r.calib.report.plots import (
     thumbnail_strip,
 )
 from s2r.calib.solve.mono import MonoCalibration
+from s2r.calib.solve.projection import ProjectionMap
 from s2r.calib.solve.stereo import StereoCalibration
 from s2r.calib.solve.synth import board_object_points
 from s2r.fileio import OutputBatch
@@ -204,15 +205,30 @@ def _honest_lines(result: StereoCalibration) -> list[str]:
     return list(out)
 
 
-def _std_table(result: StereoCalibration) -> str:
+def _std_table(result: StereoCalibration | MonoCalibration) -> str:
     h = result.heldout
     if h is None:
-        return "<p class='note'>too few pairs for the jackknife: std from the covariance only</p>"
+        return "<p class='note'>too few views for the jackknife: std from the covariance only</p>"
     rows = [[s.name, s.value, s.covariance, s.jackknife, s.source] for s in h.stds]
     return html_table(["parameter (px; baseline m; rotation deg)", "value", "std (covariance)",
                        f"std ({h.folds}-fold jackknife)", "reported"], rows,
                       caption="both standard deviations; the larger is reported and written to the profile",
                       left=[0, 4])
+
+
+def _projection_section(projection: dict[str, dict[str, ProjectionMap | None]], size: tuple[int, int]
+                        ) -> list[ReportSection]:
+    """The projection uncertainty maps and their figures (none when neither map exists)."""
+    if not any(m is not None for maps in projection.values() for m in maps.values()):
+        return []
+    rows = [[side, src, m.centre_px, m.corner_px] for side, maps in projection.items()
+            for src, m in maps.items() if m is not None]
+    return [ReportSection("Projection uncertainty", paragraphs=[(
+        "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
+        "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
+        images=[("projection uncertainty over the image (the larger of the two)",
+                 projection_uncertainty(projection, size))],
+        tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])])]
 
 
 def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
@@ -251,15 +267,7 @@ def _stereo_sections(result: StereoCalibration) -> list[ReportSection]:
                 {"left": [r[0] for r in sol.residuals], "right": [r[1] for r in sol.residuals]}, size)),
             ("board poses in 3D", board_poses_3d(sol.rvecs, sol.tvecs,
                                                  board_object_points(q.pattern, q.square_m), p.R, p.T))]))
-    if any(m is not None for maps in result.projection.values() for m in maps.values()):
-        rows = [[side, src, m.centre_px, m.corner_px] for side, maps in result.projection.items()
-                for src, m in maps.items() if m is not None]
-        sections.append(ReportSection("Projection uncertainty", paragraphs=[(
-            "How far a point seen at each pixel may land under other plausible calibrations (covariance draws, "
-            "or the jackknife folds), after the camera rotation the board poses absorb; worst direction, px.")],
-            images=[("projection uncertainty over the image (the larger of the two)",
-                     projection_uncertainty(result.projection, size))],
-            tables=[html_table(["camera", "from", "centre (px)", "worst image corner (px)"], rows, left=[0, 1])]))
+    sections += _projection_section(result.projection, size)
     sections.append(ReportSection("Coverage", paragraphs=[(
         f"board tilt {result.spread.tilt_deg[0]:.0f}-{result.spread.tilt_deg[1]:.0f} deg, distance "
         f"{result.spread.distance_m[0]:.2f}-{result.spread.distance_m[1]:.2f} m, board area "
@@ -278,13 +286,20 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
     cam = result.profile.camera
     q = result.profile.provenance.calibration
     assert q is not None
+    h = result.heldout
+    held = [] if h is None else [
+        f"Held-out error {h.heldout_px:.3f} px over the corners of views left out of the fit ({h.folds} folds; one "
+        f"board pose per held-out view), {h.heldout_all_px:.3f} px over all ({h.corners_rejected} of "
+        f"{h.corners_total} corners in views beyond the training solve's threshold)."]
     summary = ReportSection("Summary", paragraphs=[(
-        f"Board: {_board(q.pattern, q.square_m)}. "
+        f"Board: {result.board or _board(q.pattern, q.square_m)}. "
         f"{q.views_used} views used, {len(result.dropped)} skipped or dropped; RMS {q.rms_left_px:.3f} px.")]
-        + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
-        tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam))])
-    names = list(result.view_names) + [d.name for d in result.dropped if d.rms_px is not None]
-    errs = list(result.view_errors_px) + [float(d.rms_px) for d in result.dropped if d.rms_px is not None]
+        + held + [html_fragment("<span class='warn'>warning: {{ w }}</span>", w=w) for w in result.warnings],
+        tables=[html_table(["parameter", "value", "std", "relative std"], _camera_rows("camera", cam)),
+                _std_table(result)])
+    outliers = [d for d in result.dropped if d.rms_px is not None and d.reason.startswith("outlier")]
+    names = list(result.view_names) + [d.name for d in outliers]
+    errs = list(result.view_errors_px) + [float(d.rms_px) for d in outliers if d.rms_px is not None]
     used = [True] * len(result.view_names) + [False] * (len(names) - len(result.view_names))
     sections = [_verdict_section(result), summary,
                 ReportSection("Lens model comparison", tables=[_models_table(result)]),
@@ -293,6 +308,7 @@ def _mono_sections(result: MonoCalibration) -> list[ReportSection]:
         tables=[_dropped_table(result)]),
         ReportSection("Coverage", images=[("views whose board covers each part of the image", coverage_maps(
             {"camera": result.coverage}, result.profile.camera.image_size))])]
+    sections += _projection_section(result.projection, result.profile.camera.image_size)
     sample = _sample(result)
     if sample is not None:
         sections.append(ReportSection("Detection", images=[

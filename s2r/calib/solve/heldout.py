@@ -23,7 +23,7 @@ from s2r.calib.solve.observations import StereoObservation, chessboard_observati
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.resample import PARAMETERS, FoldOutcome, FoldTask, jackknife_std, run_folds, split_folds
 
-__all__ = ["BEND_SIGMAS", "ParameterStd", "StereoHeldout", "bend_significant", "stereo_heldout"]
+__all__ = ["BEND_SIGMAS", "ParameterStd", "StereoHeldout", "bend_significant", "observations_heldout", "stereo_heldout"]
 
 FloatArray = NDArray[np.float64]
 Corners = NDArray[np.float32]
@@ -210,6 +210,18 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
     scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]
     return result, _comparison({m: scored[m] for m in order}, lens.name), w_result, warped
+
+
+def observations_heldout(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel, *,
+                         max_error_px: float | None, jobs: int) -> StereoHeldout | None:
+    """Held-out error and both std devs of the joint solve ``sol`` of ``obs`` (its used views, in the order of
+    its board poses; any corner layout, e.g. a ``--target`` matched by corner id), with no lens-model
+    comparison; None with too few views for two folds."""
+    folds = split_folds(len(obs))
+    if not folds:
+        return None
+    outcomes, _, _ = run_folds(_tasks(obs, sol, lens, folds, max_error_px), jobs=jobs)
+    return _summary(outcomes, sol)
 
 
 def bend_significant(warped: PairSolution, k: float = BEND_SIGMAS) -> bool:

@@ -91,7 +91,7 @@ def calibrate_stereo_bag(
 
         result = calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
-            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag))
+            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag), jobs=jobs or os.cpu_count() or 1)
         sample = next((samples[n] for n in result.used_names if n in samples), None)
         return replace(result, sample_images=sample if sample is None or not swap else (sample[1], sample[0]))
     result = calibrate_stereo_detections(

@@ -20,11 +20,13 @@ import numpy as np
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
+from s2r.calib.solve.heldout import StereoHeldout
 from s2r.calib.solve.lens import DEFAULT_LENS
-from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
+from s2r.calib.solve.stereo_figures import repeat_warning, with_reported_std
+from s2r.calib.solve.target_honest import merge_repeat_pairs, pair_heldout
 from s2r.calib.solve.target_joint import joint_solve, lens_model_of
 from s2r.calib.solve.targetcal import (
     CameraViews,
@@ -45,12 +47,12 @@ from s2r.calib.solve.targetcal import (
 from s2r.calib.solve.verdict import stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
-from s2r.profile import DroppedView, Extrinsics, MonoProfile, Provenance, SourceFile, StereoProfile
+from s2r.profile import DroppedView, Extrinsics, Provenance, SourceFile, StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification
 from s2r.targets import AnyTarget, CheckerboardTarget
 
-__all__ = ["calibrate_mono_target", "calibrate_stereo_target", "calibrate_stereo_target_detections"]
+__all__ = ["calibrate_stereo_target", "calibrate_stereo_target_detections"]
 
 log = logging.getLogger(__name__)
 _STEREO_ROUNDS = 4
@@ -143,9 +145,10 @@ def calibrate_stereo_target_detections(
     pairs: Sequence[tuple[str, Detection, Detection]], *, target: AnyTarget, lens: str = "pinhole",
     distortion: str = DEFAULT_LENS, name: str = "calibrated", max_error_px: float | None = None,
     fix_intrinsics: bool = False, swap: bool = False, sources: Sequence[SourceFile] = (),
-    extra_dropped: Sequence[DroppedView] = (),
+    extra_dropped: Sequence[DroppedView] = (), jobs: int = 1,
 ) -> StereoCalibration:
-    """Solve a stereo calibration from per-image detections with corner ids (see the module docstring)."""
+    """Solve a stereo calibration from per-image detections with corner ids (see the module docstring);
+    ``jobs``: processes of the held-out folds."""
     if swap:
         pairs = [(n, dr, dl) for n, dl, dr in pairs]
     size = check_sizes([d for _, dl, dr in pairs for d in (dl, dr)])
@@ -156,6 +159,9 @@ def calibrate_stereo_target_detections(
         raise no_target_error(sum(d.status != "unreadable" for _, dl, dr in pairs for d in (dl, dr)), target)
     dropped = [*extra_dropped, *_skipped([dl for _, dl, _ in pairs], obs_l),
                *_skipped([dr for _, _, dr in pairs], obs_r)]
+    unique, repeats = merge_repeat_pairs(names, obs_l, obs_r)
+    names, obs_l, obs_r = [names[i] for i in unique], [obs_l[i] for i in unique], [obs_r[i] for i in unique]
+    dropped += repeats
     (fit_l, fit_r), keeps = _mono_fits(obs_l, obs_r, size, lens=lens, distortion=distortion,
                                        max_error_px=max_error_px, dropped=dropped,
                                        prune=not isinstance(target, CheckerboardTarget))
@@ -166,21 +172,30 @@ def calibrate_stereo_target_detections(
         solved = _stereo_rounds(views, fit_l, fit_r, size, lens=lens, distortion=distortion,
                                 max_error_px=max_error_px)
         dropped += [DroppedView(name=o.name, rms_px=o.stereo_px, reason=o.reason) for o in solved.outliers]
-        return _fixed_result(solved, fit_l, fit_r, size, target=target, lens=lens, distortion=distortion,
-                             name=name, sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
-                             detected=len(names))
+        fixed = _fixed_result(solved, fit_l, fit_r, size, target=target, lens=lens, distortion=distortion,
+                              name=name, sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
+                              detected=len(names) + len(repeats))
+        return replace(fixed, warnings=(*_logged(repeat_warning(repeats)), *fixed.warnings))
     joint_obs, sol = joint_solve(names, obs_l, obs_r, keeps, fit_l, fit_r, views, lens=lens,
                                   distortion=distortion, max_error_px=max_error_px)
-    return _joint_result(joint_obs, sol, views, size, target=target, lens=lens, distortion=distortion, name=name,
-                         sources=sources, dropped=dropped, reordered=reordered, obs=(obs_l, obs_r),
-                         detected=len(names), fit_l=fit_l)
+    held = pair_heldout(joint_obs, sol, lens_model_of(lens, distortion), max_error_px=max_error_px, jobs=jobs)
+    result = _joint_result(joint_obs, with_reported_std(sol, held), views, size, target=target, lens=lens,
+                           distortion=distortion, name=name, sources=sources, dropped=dropped, reordered=reordered,
+                           obs=(obs_l, obs_r), detected=len(names) + len(repeats), fit_l=fit_l, heldout=held)
+    return replace(result, warnings=(*_logged(repeat_warning(repeats)), *result.warnings))
+
+
+def _logged(warnings: list[str]) -> list[str]:
+    for w in warnings:
+        log.warning("%s", w)
+    return warnings
 
 
 def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: Sequence[PairView],
                   size: tuple[int, int], *, target: AnyTarget, lens: str, distortion: str, name: str,
                   sources: Sequence[SourceFile], dropped: list[DroppedView], reordered: list[str],
                   obs: tuple[list[Observation | None], list[Observation | None]], detected: int,
-                  fit_l: MonoFit) -> StereoCalibration:
+                  fit_l: MonoFit, heldout: StereoHeldout | None = None) -> StereoCalibration:
     model = lens_model_of(lens, distortion)
     used = {joint_obs[i].name for i in sol.keep}
     outliers = [ViewError(joint_obs[i].name, a, b, c, used=False, reason=why) for i, a, b, c, why in sol.outliers]
@@ -213,7 +228,8 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         log.warning("%s", w)
     view_errors = [ViewError(joint_obs[i].name, float(e[0]), float(e[1]), float(e[2]), used=True)
                    for i, e in zip(sol.keep, sol.per_view, strict=True)]
-    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None, epipolar_px=epi, baseline_m=profile.baseline_m,
+    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None if heldout is None else heldout.heldout_px,
+                             epipolar_px=epi, baseline_m=profile.baseline_m,
                              baseline_std_m=profile.extrinsics.baseline_std_m,
                              coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable)
     # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
@@ -228,7 +244,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
         used_names=tuple(joint_obs[i].name for i in sol.keep),
         corners_left=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for o, _ in seen),
         corners_right=tuple(empty.astype(np.float32) if o is None else o.img.astype(np.float32) for _, o in seen),
-        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe())
+        reordered=tuple(reordered), solution=aligned, verdict=verdict, board=target.describe(), heldout=heldout)
 
 
 def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int, int], *, target: AnyTarget,
@@ -316,49 +332,10 @@ def calibrate_stereo_target(
         pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
         fix_intrinsics=fix_intrinsics, swap=swap,
         sources=[SourceFile(path=str(p), sha256=h) for p, h in hashes.items()],
-        extra_dropped=extra)
+        extra_dropped=extra, jobs=jobs or os.cpu_count() or 1)
     report(progress, 1, 1, "solving")
     idx = labels.index(result.used_names[0])
     sample = (Path(right_paths[idx]), Path(left_paths[idx])) if swap else (Path(left_paths[idx]),
                                                                           Path(right_paths[idx]))
     return StereoCalibration(**{**result.__dict__, "sample_paths": sample,
                                 "detection_cached": sum(d.cached for d in dets)})
-
-
-def calibrate_mono_target(
-    paths: Sequence[Path], *, target: AnyTarget, lens: str = "pinhole", distortion: str = DEFAULT_LENS,
-    name: str = "calibrated", max_error_px: float | None = None, jobs: int | None = None,
-    cache_dir: Path | None = None, progress: ProgressCallback | None = None,
-) -> MonoCalibration:
-    """Calibrate one camera from image files of ``target`` (partial views used) through ``lens``."""
-    hashes: dict[Path, str] = {}
-    dets = _detect(paths, target, jobs=jobs, cache_dir=cache_dir, progress=progress, hashes=hashes)
-    size = check_sizes(dets)
-    obs = observations(dets, target)
-    if not any(o is not None for o in obs):
-        raise no_target_error(sum(d.status != "unreadable" for d in dets), target)
-    skipped = _skipped(dets, obs)
-    index = [k for k, o in enumerate(obs) if o is not None]
-    if len(index) < MIN_VIEWS:
-        raise too_few_error(len(index), skipped, what="images")
-    views = [o for o in obs if o is not None]
-    fit = fit_camera(CameraViews(views, size, lens, distortion, not isinstance(target, CheckerboardTarget)),
-                     max_error_px=max_error_px, camera="the")
-    used = [views[i] for i in fit.keep]
-    cov = coverage_of([v.img for v in views], size)
-    spread = centred_spread(fit.solution, used, target, size)
-    dropped = (*skipped, *fit.outliers)
-    quality = quality_of(target, lens=lens, distortion=distortion, views_used=len(used), views_dropped=dropped,
-                         views_detected=len(views), rms_left_px=fit.solution.rms_px, coverage_left=cov.fraction,
-                         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m)
-    profile = MonoProfile(name=name, camera=to_camera(fit.solution, size, lens=lens, distortion=distortion),
-                          provenance=Provenance(origin="real", method=_method(lens, False), calibration=quality,
-                                                sources=tuple(SourceFile(path=str(p), sha256=h)
-                                                              for p, h in hashes.items())))
-    warnings = coverage_warnings("the", cov, spread)
-    for w in warnings:
-        log.warning("%s", w)
-    return MonoCalibration(profile=profile, view_names=tuple(v.name for v in used),
-                           view_errors_px=tuple(float(e) for e in fit.solution.per_view_px), dropped=dropped,
-                           threshold_px=fit.threshold, coverage=cov, spread=spread, warnings=tuple(warnings),
-                           corners=tuple(v.img for v in used), sample_path=Path(paths[index[fit.keep[0]]]))
