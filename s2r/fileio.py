@@ -141,8 +141,8 @@ def _check_below_root(root: Path, out: Path) -> None:
                                     hint="choose another output folder")
 
 
-def _write_temporary(out: Path, data: bytes) -> str:
-    """Write ``data`` to a new temporary file beside ``out`` (synced to disk); its name.
+def _write_temporary(out: Path, data: bytes, *, sync: bool = True) -> str:
+    """Write ``data`` to a new temporary file beside ``out`` (synced to disk unless ``sync`` is False); its name.
 
     Any failure (no space, file too large, read-only, no permission) removes the temporary and raises the
     one-line ``FILE: cannot write: REASON``.
@@ -163,7 +163,8 @@ def _write_temporary(out: Path, data: bytes) -> str:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()
-            os.fsync(handle.fileno())
+            if sync:
+                os.fsync(handle.fileno())
     except OSError as exc:
         Path(tmp_name).unlink(missing_ok=True)
         raise _cannot_write(out, exc) from None
@@ -186,11 +187,14 @@ class OutputBatch:
         force: replace existing regular files (never links, folders or special files).
         root: the output folder; every folder between it and a file must be a real folder (a symlinked
             ``R/left`` is refused), and files outside it are refused.
+        durable: sync each file to disk before it is published (False for a cache whose reader rejects a file
+            a power loss left empty or torn: it saves a disk flush per file).
     """
 
-    def __init__(self, *, force: bool, root: str | Path | None = None) -> None:
+    def __init__(self, *, force: bool, root: str | Path | None = None, durable: bool = True) -> None:
         self.force = force
         self.root = None if root is None else Path(root)
+        self.durable = durable
         self._staged: list[tuple[str, Path]] = []
         self._names: set[Path] = set()
 
@@ -211,7 +215,7 @@ class OutputBatch:
         out = self._check(path)
         if out in self._names:
             raise ValueError(f"{out} is staged twice")
-        self._staged.append((_write_temporary(out, data), out))
+        self._staged.append((_write_temporary(out, data, sync=self.durable), out))
         self._names.add(out)
         return out
 
@@ -303,23 +307,25 @@ def _replace(tmp_name: str, out: Path) -> str | None:
     return backup or None
 
 
-def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False, root: str | Path | None = None) -> Path:
+def atomic_write_bytes(path: str | Path, data: bytes, *, force: bool = False, root: str | Path | None = None,
+                       durable: bool = True) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder, published atomically.
 
     A crash mid-write leaves the old file (or no file), never a truncated one; a write error (full disk, file
     too large, read-only) is ``FILE: cannot write: REASON`` with nothing written. Refuses (see
     :func:`check_output_free`) symlinks and non-regular files always, an existing file unless ``force``; without
     ``force`` the file is created exclusively, so two racing runs cannot both write it. With ``root``, every
-    folder between it and ``path`` must be a real folder, not a link.
+    folder between it and ``path`` must be a real folder, not a link. ``durable`` as :class:`OutputBatch`.
     """
-    with OutputBatch(force=force, root=root) as batch:
+    with OutputBatch(force=force, root=root, durable=durable) as batch:
         batch.add_bytes(path, data)
         return batch.publish()[0]
 
 
-def atomic_write_text(path: str | Path, text: str, *, force: bool = False, root: str | Path | None = None) -> Path:
+def atomic_write_text(path: str | Path, text: str, *, force: bool = False, root: str | Path | None = None,
+                      durable: bool = True) -> Path:
     """UTF-8 text version of :func:`atomic_write_bytes`."""
-    return atomic_write_bytes(path, text.encode("utf-8"), force=force, root=root)
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force, root=root, durable=durable)
 
 
 def check_output_dir(path: str | Path, *, force: bool) -> Path:

@@ -56,3 +56,35 @@ def test_calibration_reports_a_corrupt_view_once(tmp_path: Path) -> None:
     files = _bad_files(tmp_path)
     detection = _detect_item(DetectItem("crc", "0" * 64, files["crc.png"]), (9, 6))
     assert detection.status == "unreadable" and "corrupt PNG" in detection.detail
+
+
+def _png_with_chunk(png: bytes, kind: bytes, payload: bytes) -> bytes:
+    """``png`` with one more ancillary chunk right after IHDR (CRC computed as the PNG spec says)."""
+    import zlib
+
+    chunk = len(payload).to_bytes(4, "big") + kind + payload + zlib.crc32(kind + payload).to_bytes(4, "big")
+    return png[:33] + chunk + png[33:]
+
+
+def test_grey_decoding_equals_opencvs_for_every_png_kind(tmp_path: Path) -> None:
+    """The 8-bit greyscale PNG shortcut gives IMREAD_GRAYSCALE's pixels; every other kind takes OpenCV's path."""
+    rng = np.random.default_rng(3)
+    grey = rng.integers(0, 256, (37, 53), np.uint8)
+    colour = rng.integers(0, 256, (37, 53, 3), np.uint8)
+    plain = bytes(cv2.imencode(".png", grey)[1])
+    cases = {
+        "grey8": plain,
+        "grey8_trns": _png_with_chunk(plain, b"tRNS", (7).to_bytes(2, "big")),
+        "grey8_exif": _png_with_chunk(plain, b"eXIf", b"MM\x00*\x00\x00\x00\x08\x00\x00"),
+        "grey16": bytes(cv2.imencode(".png", grey.astype(np.uint16) * 257)[1]),
+        "colour": bytes(cv2.imencode(".png", colour)[1]),
+        "colour_alpha": bytes(cv2.imencode(".png", np.dstack([colour, grey]))[1]),
+    }
+    for name, data in cases.items():
+        path = tmp_path / f"{name}.png"
+        path.write_bytes(data)
+        got, reason = decode_image_file(path, cv2.IMREAD_GRAYSCALE)
+        want = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
+        assert reason == "" and got is not None, name
+        assert got.dtype == np.uint8 and got.shape == (37, 53), name
+        assert np.array_equal(got, want), name

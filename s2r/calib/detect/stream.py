@@ -170,8 +170,9 @@ class CornerCache:
                                 "corners": None if det.corners is None else det.corners.round(4).tolist()}
         if det.ids is not None:
             data["ids"] = det.ids.astype(int).tolist()
-        with contextlib.suppress(OSError, S2RError):
-            atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True, root=self.folder)
+        with contextlib.suppress(OSError, S2RError):  # not synced: an entry a power loss tore fails to parse
+            atomic_write_text(self._file(det.sha256, pattern), json.dumps(data), force=True, root=self.folder,
+                              durable=False)
 
 
 def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs: int = 1,

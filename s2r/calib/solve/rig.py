@@ -42,8 +42,10 @@ MAX_BOARD_DISTANCE_M = 30.0
 MAX_BASELINE_M = 3.0
 MIN_BOARD_DISTANCE_M = 0.02
 #: Most views each camera's initialisation solves with (evenly spaced); the other views' board poses are then
-#: fitted alone (solvePnP) with those intrinsics. The joint solve refines everything on all views.
-MAX_INIT_VIEWS = 20
+#: fitted alone (solvePnP) with those intrinsics. The joint solve refines everything on all views: from 12 or
+#: 20 views it reached the same answer (fx and baseline within 1e-7 relative) on four real sets of 22-40 pairs,
+#: and 12 halves this step (~25 ms per camera at 20 views).
+MAX_INIT_VIEWS = 12
 
 
 @dataclass(frozen=True)
