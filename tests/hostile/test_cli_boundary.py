@@ -16,6 +16,11 @@ from s2r.cli import EXIT_INTERNAL, main
 
 REPO = Path(__file__).resolve().parents[2]
 PROFILE = REPO / "profiles" / "real" / "realsense_d435_848x480.yaml"
+#: The installed console script (``s2r.cli:entry``, which skips the interpreter's teardown) beside ``-m s2r``.
+SCRIPT = Path(sys.executable).parent / "s2r"
+LAUNCHERS = [pytest.param([sys.executable, "-m", "s2r"], id="python-m"),
+             pytest.param([str(SCRIPT)], id="console-script",
+                          marks=pytest.mark.skipif(not SCRIPT.exists(), reason=f"{SCRIPT} is not installed"))]
 
 
 def _raising(exc: BaseException) -> object:
@@ -67,10 +72,11 @@ def test_keyboard_interrupt_is_130_and_quiet(monkeypatch: pytest.MonkeyPatch,
     assert "Traceback" not in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("launcher", LAUNCHERS)
 @pytest.mark.parametrize("argv", [["profile", "show", str(PROFILE), "--json"], ["profile", "list"]])
-def test_closed_pipe_is_quiet(argv: list[str]) -> None:
+def test_closed_pipe_is_quiet(launcher: list[str], argv: list[str]) -> None:
     """The reader of stdout is gone before s2r writes (``s2r ... | true``): no traceback, exit 0."""
-    proc = subprocess.Popen([sys.executable, "-m", "s2r", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen([*launcher, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     assert proc.stdout is not None and proc.stderr is not None
     proc.stdout.close()
     err = proc.stderr.read().decode()
@@ -78,8 +84,24 @@ def test_closed_pipe_is_quiet(argv: list[str]) -> None:
     assert err == ""
 
 
-def test_piped_into_head() -> None:
-    shell = f"{sys.executable} -m s2r profile show {PROFILE} --json | head -n 2"
+@pytest.mark.parametrize("launcher", LAUNCHERS)
+def test_piped_into_head(launcher: list[str]) -> None:
+    shell = f"{' '.join(launcher)} profile show {PROFILE} --json | head -n 2"
     result = subprocess.run(["bash", "-o", "pipefail", "-c", shell], capture_output=True, text=True, timeout=120)
     assert result.stdout.count("\n") == 2 and "Traceback" not in result.stderr and result.returncode == 0
 
+
+
+@pytest.mark.parametrize("launcher", LAUNCHERS)
+def test_every_line_arrives_and_the_exit_code_is_kept(launcher: list[str], tmp_path: Path) -> None:
+    """Output to a file (block-buffered) is flushed whole before the process ends, the exit code is main()'s,
+    and an error is still one line on stderr with exit 2."""
+    whole = subprocess.run([*launcher, "profile", "show", str(PROFILE), "--json"], capture_output=True,
+                           text=True, timeout=120)
+    again = subprocess.run([sys.executable, "-m", "s2r", "profile", "show", str(PROFILE), "--json"],
+                           capture_output=True, text=True, timeout=120)
+    assert whole.returncode == 0 and whole.stdout == again.stdout and whole.stdout.rstrip().endswith("}")
+    bad = subprocess.run([*launcher, "profile", "show", str(tmp_path / "missing.yaml")], capture_output=True,
+                         text=True, timeout=120)
+    assert bad.returncode == 2 and bad.stdout == ""
+    assert bad.stderr.count("\n") == 1 and bad.stderr.startswith("error:") and "missing.yaml" in bad.stderr
