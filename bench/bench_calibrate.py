@@ -25,6 +25,8 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   against 0.53 s), median of 3 at load 2-5 on 2 cores. The solve part (0.9 s) is the joint solve, the bent-board
   solve and 8 full + 16 small fold solves (held-out error, jackknife, lens models) on two processes, against
   the plain script's 0.05 s of calibrateCamera and stereoCalibrate.
+- whole process: the plain script above as its own process (``python -c``) against the installed ``s2r
+  calibrate`` console script (fresh output folder, so a fresh corner cache), start to exit, as a user times them.
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
@@ -43,6 +45,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import yaml
 
 from s2r.calib import calibrate_stereo
 from s2r.calib.detect import DetectItem, detect_stream
@@ -137,19 +140,83 @@ def s2r_whole(left: list[Path], right: list[Path], jobs: int) -> tuple[float, in
     return elapsed, q.views_detected if q else 0
 
 
+#: The plain anchor as its own process: the FAST_CHECK loop, calibrateCamera per camera, stereoCalibrate
+#: (intrinsics fixed, k3 fixed), as issue 22's "plain script". argv: LEFT_DIR RIGHT_DIR.
+_PLAIN_SCRIPT = """
+import sys, glob, cv2, numpy as np
+pattern, square = (9, 6), 0.025
+flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
+objp = np.zeros((54, 3), np.float32)
+objp[:, :2] = np.mgrid[0:9, 0:6].T.reshape(-1, 2) * square
+left, right = sorted(glob.glob(sys.argv[1] + "/*.png")), sorted(glob.glob(sys.argv[2] + "/*.png"))
+pl, pr = [], []
+for a, b in zip(left, right):
+    found = []
+    for path in (a, b):
+        g = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
+        ok, c = cv2.findChessboardCorners(g, pattern, flags=flags)
+        found.append(cv2.cornerSubPix(g, c, (11, 11), (-1, -1), crit) if ok else None)
+    if found[0] is not None and found[1] is not None:
+        pl.append(found[0])
+        pr.append(found[1])
+obj, size = [objp] * len(pl), g.shape[::-1]
+_, K1, D1, _, _ = cv2.calibrateCamera(obj, pl, size, None, None, flags=cv2.CALIB_FIX_K3)
+_, K2, D2, _, _ = cv2.calibrateCamera(obj, pr, size, None, None, flags=cv2.CALIB_FIX_K3)
+cv2.stereoCalibrate(obj, pl, pr, K1, D1, K2, D2, size, flags=cv2.CALIB_FIX_INTRINSIC | cv2.CALIB_FIX_K3)
+print(len(pl))
+"""
+
+
+def _linked_set(left: list[Path], right: list[Path], folder: Path) -> tuple[Path, Path]:
+    """``folder``/left and ``folder``/right holding links to the pair's images (a folder ``s2r calibrate`` reads)."""
+    for side, files in (("left", left), ("right", right)):
+        (folder / side).mkdir()
+        for i, f in enumerate(files):
+            os.symlink(f, folder / side / f"{i:04d}{f.suffix}")
+    return folder / "left", folder / "right"
+
+
+def plain_process(left: list[Path], right: list[Path]) -> tuple[float, int]:
+    """The plain script as its own process: wall seconds from start to exit, pairs used."""
+    with tempfile.TemporaryDirectory() as tmp:
+        dl, dr = _linked_set(left, right, Path(tmp))
+        t0 = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", _PLAIN_SCRIPT, str(dl), str(dr)], capture_output=True, text=True,
+                             check=True)
+        return time.perf_counter() - t0, int(out.stdout.split()[-1])
+
+
+def s2r_process(left: list[Path], right: list[Path], jobs: int) -> tuple[float, int]:
+    """``s2r calibrate`` (the installed console script) as a user runs it first: wall seconds, pairs used."""
+    script = Path(sys.executable).parent / "s2r"
+    with tempfile.TemporaryDirectory() as tmp:
+        _linked_set(left, right, Path(tmp))
+        out = Path(tmp) / "out" / "rig.yaml"
+        t0 = time.perf_counter()
+        subprocess.run([str(script), "calibrate", tmp, "--pattern", "9x6", "--square", str(SQUARE), "-o", str(out),
+                        "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True)
+        elapsed = time.perf_counter() - t0
+        used = yaml.safe_load(out.read_text())["provenance"]["calibration"]["views_used"]
+        return elapsed, int(used)
+
+
 def first_run_table(sets: dict[str, tuple[list[Path], list[Path]]], jobs: int, repeats: int) -> None:
     """Detection-only and whole-run times of plain and s2r, interleaved, ``repeats`` times per set."""
     print(f"first run, median of {repeats} interleaved repeats (s2r jobs {jobs}); speed-up = plain / s2r")
     print(f"{'set':<34} {'stage':<15} {'plain (1 proc)':>22} {'s2r':>22} {'speed-up':>9}  per repeat")
     for label, (left, right) in sets.items():
         paths = [p for pair in zip(left, right, strict=True) for p in pair]
-        runs: dict[str, list[tuple[float, int]]] = {k: [] for k in ("pd", "sd", "pw", "sw")}
+        runs: dict[str, list[tuple[float, int]]] = {k: [] for k in ("pd", "sd", "pw", "sw", "pp", "sp")}
         for _ in range(repeats):
             runs["pd"].append(plain_detect(paths))
             runs["sd"].append(s2r_detect(paths, jobs))
             runs["pw"].append(plain_whole(left, right))
             runs["sw"].append(s2r_whole(left, right, jobs))
-        for stage, pk, sk, unit in (("detection only", "pd", "sd", "boards"), ("whole run", "pw", "sw", "pairs")):
+            runs["pp"].append(plain_process(left, right))
+            runs["sp"].append(s2r_process(left, right, jobs))
+        for stage, pk, sk, unit in (("detection only", "pd", "sd", "boards"), ("whole run", "pw", "sw", "pairs"),
+                                    ("whole process", "pp", "sp", "pairs")):
             tp = float(np.median([t for t, _ in runs[pk]]))
             ts = float(np.median([t for t, _ in runs[sk]]))
             each = " ".join(f"{a[0] / b[0]:.2f}" for a, b in zip(runs[pk], runs[sk], strict=True))

@@ -80,3 +80,25 @@ def test_a_bent_board_is_solved_and_used_where_it_lowers_the_heldout_error() -> 
     assert all(abs(w) <= 2 * s for w, s in zip(flat_warp["warp_mm"], flat_warp["warp_std_mm"], strict=True))
     assert not flat_warp["used"] and flat_warp["heldout_warped_px"] is None
     assert flat_warp["decision"].startswith("not used: within 2 std of a flat board")
+
+
+def test_a_flat_frame_skips_the_plain_retry(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A blank frame with sensor noise (no board: NORMALIZE_IMAGE would make countless quads of its noise)
+    is called board-less without the slow plain retry; a dim board (30 grey levels) is not flat."""
+    import s2r.calib.detect.chessboard as chessboard
+
+    rng = np.random.default_rng(5)
+    blank = np.clip(128 + rng.normal(0, 2.0, (720, 1280)), 0, 255).astype(np.uint8)
+    assert chessboard.is_flat(blank)
+    calls: list[int] = []
+    real = cv2.findChessboardCorners
+
+    def counting(image: np.ndarray, pattern: tuple[int, int], flags: int = 0) -> tuple[bool, np.ndarray]:
+        calls.append(flags)
+        return real(image, pattern, flags=flags)
+
+    monkeypatch.setattr(chessboard.cv2, "findChessboardCorners", counting)
+    assert detect_board(blank, (9, 6)) == (None, "")
+    assert calls and all(f & cv2.CALIB_CB_FAST_CHECK for f in calls)  # only the quick first pass ran
+    dim = (100 + 30 * np.kron(np.indices((18, 32)).sum(axis=0) % 2, np.ones((40, 40)))).astype(np.uint8)
+    assert not chessboard.is_flat(dim)  # 40 px squares, 30 grey levels apart

@@ -300,16 +300,6 @@ def calibrate_stereo_detections(
         projection=projection_maps(sol, held, size, lens_model(distortion).free), board_warp=warp_figures)
 
 
-
-
-
-
-
-
-
-
-
-
 def _unobservable_warnings(names: Sequence[str]) -> list[str]:
     if not names:
         return []
