@@ -99,7 +99,7 @@ def _finite(v: float) -> float | None:
 
 
 def _tasks(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel, folds: list[list[int]],
-           max_error_px: float | None) -> list[FoldTask]:
+           max_error_px: float | None, *, score_only: bool = False) -> list[FoldTask]:
     n = lens.n_coef
 
     def fit(d: FloatArray) -> FloatArray:
@@ -116,7 +116,8 @@ def _tasks(obs: Sequence[StereoObservation], sol: PairSolution, lens: LensModel,
         tasks.append(FoldTask(lens, tuple(obs[i] for i in train), tuple(obs[i] for i in test), init,
                               tuple(sol.rvecs[i] for i in test), tuple(sol.tvecs[i] for i in test), max_error_px,
                               warp=sol.warp_m is not None,
-                              masks=[list(sol.inliers[i]) for i in train] if sol.inliers else None))
+                              masks=[list(sol.inliers[i]) for i in train] if sol.inliers else None,
+                              score_only=score_only))
     return tasks
 
 
@@ -193,7 +194,7 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
     sub_sol, sub_obs = (_subset(sol, sub), [obs[i] for i in sub]) if small else (sol, obs)
     sub_folds = split_folds(len(sub_obs)) if small else folds
     for m in ([lens.name] if small else []) + others:
-        tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px)
+        tasks += _tasks(sub_obs, sub_sol, LENS_MODELS[m], sub_folds, max_error_px, score_only=True)
     flat = replace(sol, warp_m=np.zeros(2))
 
     def warp_tasks(warped: PairSolution | None) -> list[FoldTask]:
