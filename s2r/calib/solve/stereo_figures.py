@@ -102,8 +102,8 @@ def merge_repeated_views(views: StereoViews) -> tuple[StereoViews, list[DroppedV
 def repeat_warning(repeats: Sequence[DroppedView]) -> list[str]:
     if not repeats:
         return []
-    return [f"{len(repeats)} view(s) repeat an earlier view (every corner within {REPEAT_PX} px: a board held "
-            "still); merged into it, so the std counts each board pose once"]
+    return [f"{len(repeats)} view(s) repeat an earlier view (corners a median of less than {REPEAT_PX} px apart: a "
+            "board held still); merged into it, so the std counts each board pose once"]
 
 
 def dropped_warning(dropped: Sequence[DroppedView]) -> list[str]:

@@ -1,7 +1,7 @@
 """The honest figures of the corner-id paths (``--target``, ``--lens fisheye``): repeated views merged, and
 for one camera the held-out error with the jackknife std beside the covariance's.
 
-- **Repeats**: a view whose corners (the same ids) all lie within :data:`s2r.calib.solve.views.REPEAT_PX` RMS
+- **Repeats**: a view whose corners (the same ids) lie within :data:`s2r.calib.solve.views.REPEAT_PX` (median)
   of an earlier view's (in each camera that saw the board) is a board held still; it is merged into that view
   so the standard deviations count each board pose once.
 - **One camera**: :func:`s2r.calib.solve.mono_resample.mono_heldout` over the solved views (partial views,
@@ -25,20 +25,19 @@ from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_st
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.targetcal import CORNER_OUTLIER_FACTOR, MonoFit, Observation
-from s2r.calib.solve.views import REPEAT_PX
+from s2r.calib.solve.views import REPEAT_PX, repeat_distance, repeat_of
 from s2r.profile import DroppedView
 
 __all__ = ["merge_repeat_observations", "merge_repeat_pairs", "mono_fit_heldout", "pair_heldout"]
 
 
 def _distance(a: Observation | None, b: Observation | None) -> float:
-    """RMS corner distance (px) of two views of the same corner ids; inf when they differ (0 when both None)."""
+    """Median corner distance (px) of two views of the same corner ids; inf when they differ (0 when both None)."""
     if a is None or b is None:
         return 0.0 if a is None and b is None else float("inf")
     if a.ids.shape != b.ids.shape or not np.array_equal(a.ids, b.ids):
         return float("inf")
-    d = np.asarray(a.img, np.float64).reshape(-1, 2) - np.asarray(b.img, np.float64).reshape(-1, 2)
-    return float(np.sqrt(np.mean(np.sum(d ** 2, axis=1))))
+    return repeat_distance(a.img, b.img)
 
 
 def merge_repeat_pairs(names: Sequence[str], left: Sequence[Observation | None],
@@ -53,9 +52,7 @@ def merge_repeat_pairs(names: Sequence[str], left: Sequence[Observation | None],
             dist = [max(_distance(left[i], left[k]), _distance(right[i], right[k])) for k in keep]
             j = int(np.argmin(dist)) if dist else -1
             if j >= 0 and dist[j] < tol_px:
-                repeats.append(DroppedView(name=names[i], rms_px=dist[j], reason=(
-                    f"repeat of {names[keep[j]]}: every corner within {dist[j]:.3f} px RMS (a still board); merged "
-                    "into it so the std counts that board pose once")))
+                repeats.append(repeat_of(names[i], names[keep[j]], dist[j]))
                 continue
         keep.append(i)
     return keep, repeats
