@@ -129,3 +129,25 @@ def test_jackknife_folds_are_converged_solves() -> None:
         for got, want in ((fold.K1, tight.K1), (fold.K2, tight.K2)):
             assert np.max(np.abs(got - want)) < 0.02, (got, want)  # px, against fold spreads of ~1 px
         assert abs(np.linalg.norm(fold.T) - np.linalg.norm(tight.T)) < 2e-6  # m
+
+
+def test_only_detector_blunders_leave_the_heldout_error() -> None:
+    """Two held-out corners the detector put 6.6 px off (as in a real bag) are left out; the heavy but honest
+    tail of a noisy fold is kept (the figure is not flattered by a rule from the smaller training residuals)."""
+    from s2r.calib.solve.resample import FoldOutcome, trim_blunders
+
+    rng = np.random.default_rng(12)
+    nan = np.full((3, 3), np.nan)
+
+    def fold(errors_px: np.ndarray) -> FoldOutcome:
+        sq = errors_px ** 2
+        return FoldOutcome(nan, nan, nan, np.full(3, np.nan), sq, sq)
+
+    calm = np.hypot(*rng.normal(0, 0.15, (2, 800)))
+    rough = np.hypot(*rng.normal(0, 0.3, (2, 800)))
+    blunders = np.r_[np.hypot(*rng.normal(0, 0.15, (2, 798))), 6.6, 6.6]
+    failed = FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed="diverged")
+    out = trim_blunders([fold(calm), fold(rough), fold(blunders), failed])
+    assert out[3] is failed
+    assert out[2].sq_inlier.size == 798 and np.all(out[2].sq_inlier < 1.0)
+    assert out[0].sq_inlier.size + out[1].sq_inlier.size >= 1590  # at most 10 of the 1600 honest errors left out

@@ -201,7 +201,7 @@ def _honest_lines(result: StereoCalibration) -> list[str]:
     if h is not None:
         out.append(f"Stereo held-out error {h.heldout_px:.3f} px over the inlier corners of pairs left out of the fit "
                    f"({h.folds} folds; one board pose per held-out pair fitted to both cameras), {h.heldout_all_px:.3f}"
-                   f" px over all ({h.corners_rejected} of {h.corners_total} corners rejected).")
+                   f" px over all ({h.corners_rejected} of {h.corners_total} corners left out as detector blunders).")
     return list(out)
 
 

@@ -21,7 +21,15 @@ from s2r.calib.solve.lens import LENS_MODELS, LensModel
 from s2r.calib.solve.models import CLEARLY_BETTER, ModelComparison, ModelScore
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.resample import PARAMETERS, FoldOutcome, FoldTask, jackknife_std, run_folds, split_folds
+from s2r.calib.solve.resample import (
+    PARAMETERS,
+    FoldOutcome,
+    FoldTask,
+    jackknife_std,
+    run_folds,
+    split_folds,
+    trim_blunders,
+)
 
 __all__ = ["BEND_SIGMAS", "ParameterStd", "StereoHeldout", "bend_significant", "observations_heldout", "stereo_heldout"]
 
@@ -67,10 +75,11 @@ class ParameterStd:
 
 @dataclass(frozen=True)
 class StereoHeldout:
-    """The stereo held-out error over ``folds`` folds (px, per corner, both coordinates): over the inlier
-    corners (``heldout_px``, the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of
-    ``corners_total`` left out by the training solve's corner rule; per fold; the standard deviations; and
-    per camera the folds' intrinsics (K, D) (for the projection uncertainty)."""
+    """The stereo held-out error over ``folds`` folds (px, per corner, both coordinates): over the corners kept
+    (``heldout_px``, the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of
+    ``corners_total`` left out as detector blunders (:func:`s2r.calib.solve.resample.trim_blunders`); per
+    fold; the standard deviations; and per camera the folds' intrinsics (K, D) (for the projection
+    uncertainty)."""
 
     folds: int
     heldout_px: float
@@ -127,6 +136,7 @@ def _rms(parts: Sequence[FloatArray]) -> float:
 
 
 def _summary(outcomes: Sequence[FoldOutcome], sol: PairSolution) -> StereoHeldout:
+    outcomes = trim_blunders(outcomes)
     good = [o for o in outcomes if not o.failed]
     jk = jackknife_std(outcomes, sol.R)
     values = [sol.K1[0, 0], sol.K1[1, 1], sol.K1[0, 2], sol.K1[1, 2], sol.K2[0, 0], sol.K2[1, 1], sol.K2[0, 2],
@@ -150,7 +160,8 @@ def _rotvec(R: FloatArray) -> FloatArray:
 
 def _comparison(scored: dict[str, Sequence[FoldOutcome]], chosen: str) -> ModelComparison:
     scores = []
-    for name, outs in scored.items():
+    for name, every in scored.items():
+        outs = trim_blunders(every)
         folds_px = tuple(_rms([o.sq_inlier]) if not o.failed else float("inf") for o in outs)
         total = _rms([o.sq_inlier for o in outs if not o.failed]) if all(not o.failed for o in outs) else float("inf")
         scores.append(ModelScore(name, total, folds_px, name == chosen))
