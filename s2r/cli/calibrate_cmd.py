@@ -303,9 +303,9 @@ def _print_honest(figures: dict[str, Any]) -> None:
     held = figures.get("stereo_heldout")
     if not held:
         return
-    print(f"  stereo held-out error {held['heldout_px']:.3f} px over the inlier corners of pairs left out "
-          f"({held['folds']} folds; {held['heldout_all_px']:.3f} px over all, {held['corners_rejected']} of "
-          f"{held['corners_total']} corners left out as blunders)")
+    print(f"  stereo held-out error {held['heldout_px']:.3f} px on pairs left out of the fit ({held['folds']} folds; "
+          f"{held['heldout_all_px']:.3f} px with the {held['corners_rejected']} of {held['corners_total']} corners "
+          "left out as detector blunders)")
     params = held["parameters"]
     jk = [n for n, p in params.items() if p["std_source"] == "jackknife"]
     print(f"  std: the larger of the covariance and the {held['folds']}-fold jackknife; jackknife for "

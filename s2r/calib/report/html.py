@@ -199,9 +199,9 @@ def _honest_lines(result: StereoCalibration) -> list[str]:
                    f"{w['warp_mm'][1]:+.3f} mm; {w['decision']}.")
     h = result.heldout
     if h is not None:
-        out.append(f"Stereo held-out error {h.heldout_px:.3f} px over the inlier corners of pairs left out of the fit "
-                   f"({h.folds} folds; one board pose per held-out pair fitted to both cameras), {h.heldout_all_px:.3f}"
-                   f" px over all ({h.corners_rejected} of {h.corners_total} corners left out as detector blunders).")
+        out.append(f"Stereo held-out error {h.heldout_px:.3f} px on pairs left out of the fit ({h.folds} folds; one "
+                   f"board pose per held-out pair fitted to both cameras); {h.heldout_all_px:.3f} px with the "
+                   f"{h.corners_rejected} of {h.corners_total} corners left out as detector blunders.")
     return list(out)
 
 
