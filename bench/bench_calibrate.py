@@ -20,11 +20,15 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
   detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
-  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them, one run on
-  a loaded machine); after them 0.62x whole run (plain 0.90 s, s2r 1.45 s; detection alone 1.60x, 0.85 s
-  against 0.53 s), median of 3 at load 2-5 on 2 cores. The solve part (0.9 s) is the joint solve, the bent-board
-  solve and 8 full + 16 small fold solves (held-out error, jackknife, lens models) on two processes, against
-  the plain script's 0.05 s of calibrateCamera and stereoCalibrate.
+  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Now
+  (session of 2026-11-24, 2 cores, median of 5 interleaved repeats): whole run in-process 0.93x (plain 0.79 s,
+  s2r 0.85 s), whole process 0.78x (0.93 s against 1.19 s; a quiet 11-run interleave of the same two commands
+  gave 0.85x, 0.94 s against 1.10 s), detection alone 1.63x. s2r's extra work after detection is the joint
+  solve, the bent-board solve, 4 converged jackknife folds and 16 short lens-comparison folds on two
+  processes, against the plain script's 0.05 s of calibrateCamera and stereoCalibrate. On the set with 20
+  board-less pairs s2r's detection is 0.64x: one view FAST_CHECK rejects (left/41.png) costs the plain retry
+  1.5 s (plain findChessboardCorners pays the same without FAST_CHECK); the flat blank frames skip the retry
+  (41 s before that).
 - whole process: the plain script above as its own process (``python -c``) against the installed ``s2r
   calibrate`` console script (fresh output folder, so a fresh corner cache), start to exit, as a user times them.
 
