@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.solve.joint import JointInit
 from s2r.calib.solve.lens import LENS_MODELS, LensModel
-from s2r.calib.solve.models import CLEARLY_BETTER, ModelComparison, ModelScore
+from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.resample import (
@@ -31,7 +31,8 @@ from s2r.calib.solve.resample import (
     trim_blunders,
 )
 
-__all__ = ["BEND_SIGMAS", "ParameterStd", "StereoHeldout", "bend_significant", "observations_heldout", "stereo_heldout"]
+__all__ = ["BEND_SIGMAS", "HeldoutFigures", "ParameterStd", "StereoHeldout", "bend_significant", "observations_heldout",
+           "stereo_heldout"]
 
 FloatArray = NDArray[np.float64]
 Corners = NDArray[np.float32]
@@ -74,12 +75,10 @@ class ParameterStd:
 
 
 @dataclass(frozen=True)
-class StereoHeldout:
-    """The stereo held-out error over ``folds`` folds (px, per corner, both coordinates): over the corners kept
+class HeldoutFigures:
+    """The held-out error over ``folds`` folds (px, per corner, both coordinates): over the corners kept
     (``heldout_px``, the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of
-    ``corners_total`` left out as detector blunders (:func:`s2r.calib.solve.resample.trim_blunders`); per
-    fold; the standard deviations; and per camera the folds' intrinsics (K, D) (for the projection
-    uncertainty)."""
+    ``corners_total`` left out; per fold; and the standard deviations of the parameters."""
 
     folds: int
     heldout_px: float
@@ -89,10 +88,9 @@ class StereoHeldout:
     folds_px: tuple[float, ...]
     stds: tuple[ParameterStd, ...]
     failed: tuple[str, ...] = ()
-    fold_intrinsics: tuple[tuple[tuple[FloatArray, FloatArray], ...], ...] = ()
 
     def std(self, name: str) -> ParameterStd:
-        """The entry of one of ``PARAMETERS``."""
+        """The entry of parameter ``name``."""
         return next(s for s in self.stds if s.name == name)
 
     def as_dict(self) -> dict[str, object]:
@@ -101,6 +99,15 @@ class StereoHeldout:
                 "corners_rejected": self.corners_rejected, "corners_total": self.corners_total,
                 "folds_px": list(self.folds_px), "failed_folds": list(self.failed),
                 "parameters": {s.name: s.as_dict() for s in self.stds}}
+
+
+@dataclass(frozen=True)
+class StereoHeldout(HeldoutFigures):
+    """The stereo held-out error (:class:`HeldoutFigures`; corners left out as detector blunders, see
+    :func:`s2r.calib.solve.resample.trim_blunders`; parameters ``PARAMETERS``) and per camera the folds'
+    intrinsics (K, D) (for the projection uncertainty)."""
+
+    fold_intrinsics: tuple[tuple[tuple[FloatArray, FloatArray], ...], ...] = ()
 
 
 def _finite(v: float) -> float | None:
@@ -165,16 +172,7 @@ def _comparison(scored: dict[str, Sequence[FoldOutcome]], chosen: str) -> ModelC
         folds_px = tuple(_rms([o.sq_inlier]) if not o.failed else float("inf") for o in outs)
         total = _rms([o.sq_inlier for o in outs if not o.failed]) if all(not o.failed for o in outs) else float("inf")
         scores.append(ModelScore(name, total, folds_px, name == chosen))
-    best = min(scores, key=lambda s: s.heldout_px)
-    mine = next(s for s in scores if s.chosen)
-    warning = None
-    if best is not mine and best.heldout_px < CLEARLY_BETTER * mine.heldout_px:
-        wins = sum(b < c for b, c in zip(best.folds_px, mine.folds_px, strict=True))
-        if wins >= len(best.folds_px) - 1:
-            warning = (f"stereo held-out pairs favour --distortion {best.model}: {best.heldout_px:.3f} px against "
-                       f"{mine.heldout_px:.3f} px for {chosen} (lower in {wins} of {len(best.folds_px)} folds); "
-                       f"consider rerunning with --distortion {best.model}")
-    return ModelComparison(tuple(scores), best.model, warning)
+    return judge_models(scores, chosen, "stereo held-out pairs")
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners

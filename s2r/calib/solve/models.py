@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.solve.lens import LENS_MODELS
 
-__all__ = ["ModelComparison", "ModelScore", "compare_models"]
+__all__ = ["ModelComparison", "ModelScore", "compare_models", "judge_models"]
 
 Corners = NDArray[np.float32]
 #: Most views used for the comparison (evenly spaced), to bound its time: 12 views in 4 folds, each model
@@ -147,13 +147,20 @@ def compare_models(left: Sequence[Corners], right: Sequence[Corners] | None, obj
             all_sq.append(sq)
         scores.append(ModelScore(name, float(np.sqrt(np.mean(np.concatenate(all_sq)))), tuple(per_fold),
                                  name == chosen))
+    return judge_models(scores, chosen, "held-out views")
+
+
+def judge_models(scores: Sequence[ModelScore], chosen: str, evidence: str) -> ModelComparison:
+    """The best of ``scores`` (each model's held-out error on the same folds) and a warning when it is clearly
+    better than the ``chosen`` model: below :data:`CLEARLY_BETTER` times its error and lower in all folds but at
+    most one. ``evidence`` names what was held out (``held-out views``, ``stereo held-out pairs``)."""
     best = min(scores, key=lambda s: s.heldout_px)
     mine = next((s for s in scores if s.chosen), None)
     warning = None
     if mine is not None and best is not mine and best.heldout_px < CLEARLY_BETTER * mine.heldout_px:
         wins = sum(b < c for b, c in zip(best.folds_px, mine.folds_px, strict=True))
-        if wins >= len(groups) - 1:
-            warning = (f"held-out views favour --distortion {best.model}: {best.heldout_px:.3f} px against "
-                       f"{mine.heldout_px:.3f} px for {chosen} (lower in {wins} of {len(groups)} folds); "
+        if wins >= len(best.folds_px) - 1:
+            warning = (f"{evidence} favour --distortion {best.model}: {best.heldout_px:.3f} px against "
+                       f"{mine.heldout_px:.3f} px for {chosen} (lower in {wins} of {len(best.folds_px)} folds); "
                        f"consider rerunning with --distortion {best.model}")
     return ModelComparison(tuple(scores), best.model, warning)

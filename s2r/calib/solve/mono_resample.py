@@ -26,9 +26,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import MonoSolution
-from s2r.calib.solve.heldout import ParameterStd
+from s2r.calib.solve.heldout import HeldoutFigures, ParameterStd
 from s2r.calib.solve.lens import LENS_MODELS
-from s2r.calib.solve.models import CLEARLY_BETTER, ModelComparison, ModelScore
+from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
 from s2r.calib.solve.mono_fold import MonoFoldOutcome, MonoFoldTask, run_mono_fold
 from s2r.calib.solve.resample import FOLDS, split_folds
 from s2r.executor import local_pool
@@ -45,32 +45,12 @@ MAX_COMPARE_VIEWS = 16
 
 
 @dataclass(frozen=True)
-class MonoHeldout:
-    """The held-out error over ``folds`` folds (px per corner): over the inlier views' corners (``heldout_px``,
-    the verdict's figure) and over all (``heldout_all_px``); ``corners_rejected`` of ``corners_total`` left out
-    by the training solve's view rule; per fold; fx, fy, cx, cy with both standard deviations; the folds'
-    intrinsics (K, D) (for the projection uncertainty)."""
+class MonoHeldout(HeldoutFigures):
+    """One camera's held-out error (:class:`s2r.calib.solve.heldout.HeldoutFigures`; corners left out by the
+    training solve's view rule; parameters ``MONO_PARAMETERS``) and the folds' intrinsics (K, D) (for the
+    projection uncertainty)."""
 
-    folds: int
-    heldout_px: float
-    heldout_all_px: float
-    corners_rejected: int
-    corners_total: int
-    folds_px: tuple[float, ...]
-    stds: tuple[ParameterStd, ...]
-    failed: tuple[str, ...] = ()
     fold_intrinsics: tuple[tuple[FloatArray, FloatArray], ...] = ()
-
-    def std(self, name: str) -> ParameterStd:
-        """The entry of one of ``MONO_PARAMETERS``."""
-        return next(s for s in self.stds if s.name == name)
-
-    def as_dict(self) -> dict[str, object]:
-        """JSON-ready form."""
-        return {"folds": self.folds, "heldout_px": self.heldout_px, "heldout_all_px": self.heldout_all_px,
-                "corners_rejected": self.corners_rejected, "corners_total": self.corners_total,
-                "folds_px": list(self.folds_px), "failed_folds": list(self.failed),
-                "parameters": {s.name: s.as_dict() for s in self.stds}}
 
 
 def _run(tasks: Sequence[MonoFoldTask], jobs: int) -> list[MonoFoldOutcome]:
@@ -115,16 +95,7 @@ def _comparison(scored: dict[str, Sequence[MonoFoldOutcome]], chosen: str) -> Mo
         scores.append(ModelScore(name, _rms([o.sq_inlier for o in outs]) if ok else float("inf"),
                                  tuple(_rms([o.sq_inlier]) if not o.failed else float("inf") for o in outs),
                                  name == chosen))
-    best = min(scores, key=lambda sc: sc.heldout_px)
-    mine = next(sc for sc in scores if sc.chosen)
-    warning = None
-    if best is not mine and best.heldout_px < CLEARLY_BETTER * mine.heldout_px:
-        wins = sum(b < c for b, c in zip(best.folds_px, mine.folds_px, strict=True))
-        if wins >= len(best.folds_px) - 1:
-            warning = (f"held-out views favour --distortion {best.model}: {best.heldout_px:.3f} px against "
-                       f"{mine.heldout_px:.3f} px for {chosen} (lower in {wins} of {len(best.folds_px)} folds); "
-                       f"consider rerunning with --distortion {best.model}")
-    return ModelComparison(tuple(scores), best.model, warning)
+    return judge_models(scores, chosen, "held-out views")
 
 
 def _rms(parts: Sequence[FloatArray]) -> float:
