@@ -20,8 +20,8 @@ from collections.abc import Sequence
 from typing import NoReturn, TextIO
 
 from s2r._version import __version__
-from s2r.cli import (  # _blas first: it sets the BLAS threads before numpy loads
-    _blas,  # noqa: F401
+from s2r.cli import (  # _process first: it sets the BLAS threads before numpy loads
+    _process,  # noqa: F401
     calibrate_cmd,
     check_cmd,
     depth_cmd,

@@ -131,6 +131,58 @@ def test_jackknife_folds_are_converged_solves() -> None:
         assert abs(np.linalg.norm(fold.T) - np.linalg.norm(tight.T)) < 2e-6  # m
 
 
+def test_warm_and_cold_solves_damp_little_and_reach_the_same_answer(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The rig's parameters are strongly correlated, so the textbook starting damping (1e-3 of the diagonal)
+    makes each step crawl along those directions: a fold started from the full solution took 5-6 evaluations
+    of the normal equations where Gauss-Newton needs 1-2. With the small starting dampings a fold is done in at
+    most 3 evaluations, and both the fold and the full solve land where a 1e-3 start run to a far tighter rule
+    lands."""
+    from s2r.calib.solve import heldout, joint
+    from s2r.calib.solve.joint import solve_joint
+    from s2r.calib.solve.lens import lens_model
+    from s2r.calib.solve.synth import board_object_points
+
+    rig = make_rig(34, views=16, noise_px=0.3, k3_max=0.0)
+    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                      compare=False)
+    obs = heldout._observations(res.used_names, res.corners_left, res.corners_right,
+                                board_object_points(PATTERN, SQUARE_M))
+    task = heldout._tasks(obs, res.solution, lens_model("k1k2p1p2"), split_folds(len(obs)), None)[0]
+    calls = []
+    real = joint.normal_equations
+
+    def counted(*args: object, **kwargs: object) -> object:
+        calls.append(1)
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(joint, "normal_equations", counted)
+    warm = solve_joint(task.train, task.lens, task.init, rel_tol=1e-8, covariance=False, masks=task.masks,
+                       damping=joint.WARM_DAMPING)
+    warm_calls, calls[:] = len(calls), []
+    textbook = solve_joint(task.train, task.lens, task.init, rel_tol=1e-8, covariance=False, masks=task.masks,
+                           damping=1e-3)
+    assert warm_calls <= 3 < len(calls), (warm_calls, len(calls))
+    tight = solve_joint(task.train, task.lens, task.init, rel_tol=1e-14, max_iterations=500, covariance=False,
+                        masks=task.masks, damping=1e-3)
+    for got in (warm, textbook):
+        assert np.max(np.abs(got.K1 - tight.K1)) < 0.01 and np.max(np.abs(got.K2 - tight.K2)) < 0.01  # px
+        assert abs(np.linalg.norm(got.T) - np.linalg.norm(tight.T)) < 1e-6  # m
+    # the full solve from OpenCV's per-camera calibration (START_DAMPING) against the same from a 1e-3 start
+    from s2r.calib.solve import pair
+
+    def full_solve(damping: float) -> tuple[pair.PairSolution, int]:
+        calls[:] = []
+        monkeypatch.setitem(pair._joint.__kwdefaults__, "damping", damping)  # type: ignore[arg-type]
+        return pair.solve_pair(res.used_names, res.corners_left, res.corners_right,
+                               board_object_points(PATTERN, SQUARE_M), SIZE, distortion="k1k2p1p2",
+                               square_m=SQUARE_M), len(calls)
+
+    (full, n_full), (ref, n_ref) = full_solve(joint.START_DAMPING), full_solve(1e-3)
+    assert n_full < n_ref, (n_full, n_ref)
+    assert np.max(np.abs(full.K1 - ref.K1)) < 0.01 and np.max(np.abs(full.K2 - ref.K2)) < 0.01
+    assert abs(np.linalg.norm(full.T) - np.linalg.norm(ref.T)) < 1e-6
+
+
 def test_only_detector_blunders_leave_the_heldout_error() -> None:
     """Two held-out corners the detector put 6.6 px off (as in a real bag) are left out; the heavy but honest
     tail of a noisy fold is kept (the figure is not flattered by a rule from the smaller training residuals)."""

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
-from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
+from s2r.calib.solve.joint import START_DAMPING, WARM_DAMPING, JointInit, JointSolution, solve_joint
 from s2r.calib.solve.jointterms import Masks
 from s2r.calib.solve.lens import LensModel, lens_model
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
@@ -126,9 +126,11 @@ def _intrinsics_cov(sol: JointSolution, side: str, lens: LensModel) -> FloatArra
 
 
 def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointInit, lens: LensModel,
-           max_error_px: float | None, *, warp: bool = False, masks: Masks | None = None) -> PairSolution:
+           max_error_px: float | None, *, warp: bool = False, masks: Masks | None = None,
+           damping: float = START_DAMPING) -> PairSolution:
     start = init if isinstance(init, JointInit) else init.joint_init()
-    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp, masks=masks)
+    sol = solve_joint([obs[i] for i in keep], lens, start, max_view_error_px=max_error_px, warp=warp, masks=masks,
+                      damping=damping)
     u = sol.T / np.linalg.norm(sol.T)
     b_std = float(np.sqrt(max(0.0, float(u @ sol.translation_cov() @ u))))
     r_std = float(np.degrees(np.sqrt(max(0.0, float(np.trace(sol.rotation_cov()))))))
@@ -217,7 +219,8 @@ def solve_pair_warped(names: Sequence[str], left: Sequence[Corners], right: Sequ
     obs = _observations(names, left, right, obj)
     init = JointInit(base.K1, base.D1, base.K2, base.D2, base.R, base.T, base.rvecs, base.tvecs)
     masks = [list(m) for m in base.inliers] or None
-    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True, masks=masks)
+    return _joint(obs, list(range(len(obs))), init, lens_model(distortion), max_error_px, warp=True, masks=masks,
+                  damping=WARM_DAMPING)
 
 
 def solve_pair(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners], obj: Corners,

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect.workers import worker_pool
-from s2r.calib.solve.joint import JointInit, JointSolution, solve_joint
+from s2r.calib.solve.joint import WARM_DAMPING, JointInit, JointSolution, solve_joint
 from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations
 from s2r.calib.solve.jointterms import State as SolveState
 from s2r.calib.solve.lens import LensModel
@@ -118,7 +118,7 @@ def _fit_poses(state: SolveState, views: Sequence[StereoObservation], masks: lis
                ) -> None:
     """Board poses of ``views`` (one per view, both cameras together) with the cameras and the pair fixed."""
     active = list(range(len(views)))
-    lam = 1e-3
+    lam = WARM_DAMPING
     ssr, _, _, _, (_, Avv, bv) = normal_equations(state, views, masks, active, poses_only=True)
     for _ in range(30):
         rv0, tv0 = state.copy_views()
@@ -184,7 +184,8 @@ def run_fold(task: FoldTask) -> FoldOutcome:
     try:
         sol = solve_joint(task.train, task.lens, task.init, max_view_error_px=task.max_view_error_px,
                           rel_tol=_SCORE_TOL if task.score_only else _FOLD_TOL, covariance=False, warp=task.warp,
-                          masks=task.masks, max_iterations=_SCORE_ITERATIONS if task.score_only else _FOLD_ITERATIONS)
+                          masks=task.masks, max_iterations=_SCORE_ITERATIONS if task.score_only else _FOLD_ITERATIONS,
+                          damping=WARM_DAMPING)
     except (CalibrationError, np.linalg.LinAlgError, cv2.error) as exc:
         return FoldOutcome(nan, nan, nan, np.full(3, np.nan), np.zeros(0), np.zeros(0), failed=str(exc))
     sq_all = _heldout(task, sol)
