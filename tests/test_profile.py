@@ -130,3 +130,24 @@ def test_atomic_writes_get_ordinary_permissions(rig: StereoProfile, tmp_path: Pa
     os.umask(umask)
     assert out.stat().st_mode & 0o777 == 0o666 & ~umask
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
+def test_profile_yaml_is_the_same_text_from_libyaml_and_pure_python(rig: StereoProfile) -> None:
+    """Profiles are written by libyaml's emitter where PyYAML has it (faster); its text must equal the
+    pure-Python emitter's, including for names with line separators, quotes and non-ASCII characters."""
+    import yaml
+
+    from s2r.formats import s2r_yaml
+    from s2r.registry import list_profiles, load_profile
+
+    class PurePython(yaml.SafeDumper):
+        pass
+
+    PurePython.add_representer(list, s2r_yaml._represent_list)
+    assert yaml.__with_libyaml__ and issubclass(s2r_yaml._FlowListDumper, yaml.CSafeDumper)
+    profiles = [load_profile(name) for name in list_profiles()] + [
+        rig.model_copy(update={"name": name}) for name in ("a\u2028b\x85c", "x: y # 'z'", "ünï ☃\ttab", "w " * 80)]
+    for profile in profiles:
+        data = profile.model_dump(mode="json", exclude_none=True)
+        want = yaml.dump(data, Dumper=PurePython, sort_keys=False, width=110)
+        assert profile_to_yaml(profile).endswith(want)

@@ -203,3 +203,29 @@ def test_only_detector_blunders_leave_the_heldout_error() -> None:
     assert out[3] is failed
     assert out[2].sq_inlier.size == 798 and np.all(out[2].sq_inlier < 1.0)
     assert out[0].sq_inlier.size + out[1].sq_inlier.size >= 1590  # at most 10 of the 1600 honest errors left out
+
+
+def test_the_covariance_projection_map_equals_many_draws_from_the_covariance() -> None:
+    """The covariance map is propagated to first order (as mrcal does); 3000 calibrations drawn from the same
+    covariance, each aligned by its best camera rotation, must give the same map (the sampling noise of 3000
+    draws is about 1.3 %), and a covariance that is not finite gives no map."""
+    from s2r.calib.solve.projection import covariance_projection_map, projection_map
+
+    rng = np.random.default_rng(5)
+    K = np.array([[900.0, 0, 641], [0, 905, 355], [0, 0, 1]])
+    D = np.array([-0.28, 0.11, 4e-4, -3e-4, 0.0])
+    free = (0, 1, 2, 3)
+    B = rng.normal(size=(8, 8))
+    scale = np.diag([0.8, 0.8, 0.6, 0.6, 2e-3, 4e-3, 1e-4, 1e-4])  # std of fx fy cx cy (px) k1 k2 p1 p2
+    cov = scale @ (B @ B.T / 8) @ scale  # correlated, as a real solve's
+    lin = covariance_projection_map(K, D, (1280, 720), cov, free)
+    draws = []
+    for v in rng.multivariate_normal([900, 905, 641, 355, *D[:4]], cov, size=3000):
+        Dv = D.copy()
+        Dv[:4] = v[4:]
+        draws.append((np.array([[v[0], 0, v[2]], [0, v[1], v[3]], [0, 0, 1.0]]), Dv))
+    mc = projection_map(K, D, (1280, 720), draws, jackknife=False)
+    assert lin is not None and mc is not None and lin.source == "covariance"
+    assert np.allclose(lin.sigma, mc.sigma, rtol=0.06), np.max(np.abs(lin.sigma / mc.sigma - 1))
+    assert lin.centre_px == pytest.approx(mc.centre_px, rel=0.06) and lin.corner_px > 2 * lin.centre_px
+    assert covariance_projection_map(K, D, (1280, 720), np.full((8, 8), np.nan), free) is None

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from s2r.calib.solve.cvsolve import MonoSolution
 from s2r.calib.solve.lens import LENS_MODELS
 from s2r.calib.solve.mono_resample import MonoHeldout
-from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
+from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
 
 __all__ = ["intrinsics_covariance", "mono_projection"]
 
@@ -48,7 +48,7 @@ def intrinsics_covariance(obj: Sequence[Points], img: Sequence[Points], sol: Mon
 
 def mono_projection(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolution, held: MonoHeldout | None,
                     size: tuple[int, int], *, distortion: str) -> dict[str, ProjectionMap | None]:
-    """The camera's projection uncertainty maps: ``covariance`` (draws from :func:`intrinsics_covariance`) and
+    """The camera's projection uncertainty maps: ``covariance`` (:func:`intrinsics_covariance` propagated) and
     ``jackknife`` (the folds' intrinsics; None without resampling)."""
     free = LENS_MODELS[distortion].free
     try:
@@ -56,6 +56,5 @@ def mono_projection(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolut
     except np.linalg.LinAlgError:
         cov = np.full((4 + len(free), 4 + len(free)), np.nan)
     folds = [] if held is None else list(held.fold_intrinsics)
-    return {"covariance": projection_map(sol.K, sol.D, size, covariance_samples(sol.K, sol.D, cov, free),
-                                         jackknife=False),
+    return {"covariance": covariance_projection_map(sol.K, sol.D, size, cov, free),
             "jackknife": projection_map(sol.K, sol.D, size, folds, jackknife=True)}

@@ -12,7 +12,7 @@ import numpy as np
 
 from s2r.calib.solve.heldout import BEND_SIGMAS, StereoHeldout
 from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.projection import ProjectionMap, covariance_samples, projection_map
+from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
 from s2r.calib.solve.views import REPEAT_PX, StereoViews, merge_repeats
 from s2r.profile import DroppedView
 
@@ -51,9 +51,8 @@ def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[i
     out: dict[str, dict[str, ProjectionMap | None]] = {}
     for i, (side, K, D, cov) in enumerate((("left", sol.K1, sol.D1, sol.cov_left),
                                            ("right", sol.K2, sol.D2, sol.cov_right))):
-        draws = [] if cov is None else covariance_samples(K, D, cov, free)
         folds = [] if held is None or len(held.fold_intrinsics) <= i else list(held.fold_intrinsics[i])
-        out[side] = {"covariance": projection_map(K, D, size, draws, jackknife=False),
+        out[side] = {"covariance": None if cov is None else covariance_projection_map(K, D, size, cov, free),
                      "jackknife": projection_map(K, D, size, folds, jackknife=True)}
     return out
 
