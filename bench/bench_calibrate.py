@@ -21,14 +21,17 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
   Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Now
-  (session of 2026-11-24, 2 cores, median of 5 interleaved repeats): whole run in-process 0.93x (plain 0.79 s,
-  s2r 0.85 s), whole process 0.78x (0.93 s against 1.19 s; a quiet 11-run interleave of the same two commands
-  gave 0.85x, 0.94 s against 1.10 s), detection alone 1.63x. s2r's extra work after detection is the joint
-  solve, the bent-board solve, 4 converged jackknife folds and 16 short lens-comparison folds on two
-  processes, against the plain script's 0.05 s of calibrateCamera and stereoCalibrate. On the set with 20
-  board-less pairs s2r's detection is 0.64x: one view FAST_CHECK rejects (left/41.png) costs the plain retry
-  1.5 s (plain findChessboardCorners pays the same without FAST_CHECK); the flat blank frames skip the retry
-  (41 s before that).
+  (second session of 2026-11-24, 2 cores, median of 7 interleaved repeats): whole run in-process 1.00x (plain
+  0.78 s, s2r 0.78 s), whole process 0.93x (0.95 s against 1.02 s), detection alone 1.68x. Earlier that day:
+  0.93x in-process, 0.78x whole process. The gain: glibc malloc keeping freed memory for reuse
+  (s2r/cli/_process.py: 140 000 page faults to 37 000), solves started from a small Marquardt damping (1-2
+  steps instead of 5-6), libyaml's emitter, the covariance projection map propagated instead of sampled. The
+  whole-process gap left is start-up: s2r loads pydantic and its models (about 0.1 s of CPU) where the plain
+  script loads only numpy and OpenCV; after detection s2r runs the joint solve, the bent-board solve, 4
+  converged jackknife folds and 16 short lens-comparison folds on two processes, against the plain script's
+  0.05 s of calibrateCamera and stereoCalibrate. On the set with 20 board-less pairs s2r's detection is 0.67x:
+  one view FAST_CHECK rejects (left/41.png) costs the plain retry 1.5 s (plain findChessboardCorners pays the
+  same without FAST_CHECK); the flat blank frames skip the retry (41 s before that).
 - whole process: the plain script above as its own process (``python -c``) against the installed ``s2r
   calibrate`` console script (fresh output folder, so a fresh corner cache), start to exit, as a user times them.
 
