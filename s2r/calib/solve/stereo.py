@@ -275,18 +275,19 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*repeat_warning(repeats), *dropped_warning(dropped),
+    warnings = [*repeat_warning(repeats), *dropped_warning(dropped), *([] if held is None else held.blunder_warning()),
                 *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
-    heldout = None if held is None else held.heldout_px
+    heldout = None if held is None else held.verdict_px
     verdict = stereo_verdict(
         rms_px=sol.rms_px, heldout_px=heldout, epipolar_px=float("nan") if epi is None else epi,
         baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
         coverage=(cov_l.fraction, cov_r.fraction), model_warning=None if models is None else models.warning,
-        unobservable=sol.unobservable, mismatched=len(sol.mismatched))
+        unobservable=sol.unobservable, mismatched=len(sol.mismatched),
+        heldout_over_all=held is not None and held.judged_over_all)
     view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
                    for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(

@@ -223,15 +223,17 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
     warnings = [*_unobservable(sol.unobservable), *_uncertainty_warnings(profile),
+                *([] if heldout is None else heldout.blunder_warning()),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
     view_errors = [ViewError(joint_obs[i].name, float(e[0]), float(e[1]), float(e[2]), used=True)
                    for i, e in zip(sol.keep, sol.per_view, strict=True)]
-    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None if heldout is None else heldout.heldout_px,
+    verdict = stereo_verdict(rms_px=sol.rms_px, heldout_px=None if heldout is None else heldout.verdict_px,
                              epipolar_px=epi, baseline_m=profile.baseline_m,
                              baseline_std_m=profile.extrinsics.baseline_std_m,
-                             coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable)
+                             coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable,
+                             heldout_over_all=heldout is not None and heldout.judged_over_all)
     # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
     # solve's residuals, as the report draws them
     empty = np.zeros((0, 2))

@@ -60,11 +60,14 @@ def _grade(value: float, good: float, check: float) -> Level:
 
 def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: float, baseline_m: float,
                    baseline_std_m: float | None, coverage: Sequence[float], model_warning: str | None = None,
-                   unobservable: Sequence[str] = (), mismatched: int = 0) -> Verdict:
-    """Judge a stereo calibration from its figures (see the module table)."""
+                   unobservable: Sequence[str] = (), mismatched: int = 0, heldout_over_all: bool = False) -> Verdict:
+    """Judge a stereo calibration from its figures (see the module table); ``heldout_over_all``: the held-out
+    error is over every corner (more were left out than detector blunders explain)."""
+    what = "stereo: pairs left out of the fit, one board pose per pair fitted to both cameras" + (
+        "; over all corners: more than detector blunders fell beyond the blunder threshold" if heldout_over_all
+        else "")
     reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"stereo RMS reprojection error {rms_px:.3f} px"),
-               *_heldout(heldout_px, rms_px, "stereo: pairs left out of the fit, one board pose per pair fitted to "
-                                             "both cameras")]
+               *_heldout(heldout_px, rms_px, what)]
     reasons.append(Reason(_grade(epipolar_px, 0.5, 1.0), f"epipolar RMS after rectification {epipolar_px:.3f} px"))
     if baseline_std_m is None:
         reasons.append(Reason("check", "baseline uncertainty unknown"))
