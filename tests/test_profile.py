@@ -132,12 +132,14 @@ def test_atomic_writes_get_ordinary_permissions(rig: StereoProfile, tmp_path: Pa
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
 
 
-def test_profile_yaml_is_the_same_text_from_libyaml_and_pure_python(rig: StereoProfile) -> None:
-    """Profiles are written by libyaml's emitter where PyYAML has it (faster); its text must equal the
-    pure-Python emitter's, including for names with line separators, quotes and non-ASCII characters."""
+def test_profile_yaml_from_libyaml_matches_pure_python_and_loads_back(rig: StereoProfile, tmp_path: Path) -> None:
+    """Profiles are written by libyaml's emitter where PyYAML has it (faster). Its text equals the pure-Python
+    emitter's for every shipped profile; for odd names and long non-ASCII source paths (which libyaml keeps on
+    one line where pure Python folds them) the file loads back to the same profile."""
     import yaml
 
     from s2r.formats import s2r_yaml
+    from s2r.profile import SourceFile
     from s2r.registry import list_profiles, load_profile
 
     class PurePython(yaml.SafeDumper):
@@ -145,9 +147,14 @@ def test_profile_yaml_is_the_same_text_from_libyaml_and_pure_python(rig: StereoP
 
     PurePython.add_representer(list, s2r_yaml._represent_list)
     assert yaml.__with_libyaml__ and issubclass(s2r_yaml._FlowListDumper, yaml.CSafeDumper)
-    profiles = [load_profile(name) for name in list_profiles()] + [
-        rig.model_copy(update={"name": name}) for name in ("a\u2028b\x85c", "x: y # 'z'", "ünï ☃\ttab", "w " * 80)]
-    for profile in profiles:
+    for profile in (load_profile(name) for name in list_profiles()):
         data = profile.model_dump(mode="json", exclude_none=True)
-        want = yaml.dump(data, Dumper=PurePython, sort_keys=False, width=110)
-        assert profile_to_yaml(profile).endswith(want)
+        assert profile_to_yaml(profile).endswith(yaml.dump(data, Dumper=PurePython, sort_keys=False, width=110))
+    path = "/data/калибровка_стереокамеры/" + "снимки_" * 12 + "/left/0001.png"
+    odd = [rig.model_copy(update={"name": name}) for name in ("a\u2028b\x85c", "x: y # 'z'", "ünï ☃\ttab", "w " * 80)]
+    odd.append(rig.model_copy(update={"provenance": rig.provenance.model_copy(
+        update={"sources": (SourceFile(path=path, sha256="0" * 64),)})}))
+    for k, profile in enumerate(odd):
+        out = tmp_path / f"odd{k}.yaml"
+        out.write_text(profile_to_yaml(profile), encoding="utf-8")
+        assert yaml.safe_load(out.read_text(encoding="utf-8")) == profile.model_dump(mode="json", exclude_none=True)

@@ -9,10 +9,12 @@
   ``mmap`` (above its 128 kB threshold) or gives the heap top back to the kernel on every free, and every
   reuse then faults its pages in again: 140 000 page faults and 0.2 s of kernel time in a 1.2 s, 40-pair
   calibration on 2 cores. Arrays below :data:`MMAP_THRESHOLD_BYTES` now come from the heap, and up to
-  :data:`TRIM_THRESHOLD_BYTES` of freed heap stays mapped: 37 000 faults, 0.1-0.15 s less wall time. Both
-  only bound what the process keeps mapped between allocations, never its peak. Worker processes inherit
-  them (fork). Without glibc (musl, macOS) nothing changes; ``MALLOC_MMAP_THRESHOLD_`` /
-  ``MALLOC_TRIM_THRESHOLD_`` set by the user win.
+  :data:`TRIM_THRESHOLD_BYTES` of free memory at the heap top stays mapped: 37 000 faults, 0.1-0.15 s less
+  wall time. The peak is unchanged; what stays mapped after a burst of large arrays interleaved with small
+  ones that live on can be more than that (the heap cannot shrink past a live block), as with glibc's own
+  dynamic threshold once it has risen. Worker processes inherit the settings (fork). Nothing changes without
+  glibc (musl, macOS) or when the user tuned malloc (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``
+  or ``glibc.malloc`` tunables in ``GLIBC_TUNABLES``).
 """
 
 from __future__ import annotations
@@ -40,7 +42,8 @@ def _glibc() -> bool:
 
 
 def _tune_malloc() -> None:
-    user = any(k in os.environ for k in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_"))
+    user = any(k in os.environ for k in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_")) \
+        or "glibc.malloc." in os.environ.get("GLIBC_TUNABLES", "")
     if user or not _glibc():
         return
     try:

@@ -40,8 +40,10 @@ _HEADER = (
 class _FlowListDumper(getattr(yaml, "CSafeDumper", yaml.SafeDumper)):  # type: ignore[misc]
     """Writes lists of scalars inline (``[1.0, 0.0]``) and everything else in block style.
 
-    libyaml's emitter where PyYAML has it (its wheels do): the same text as the pure-Python one, which took
-    10 ms of a calibration's serial tail for one profile."""
+    libyaml's emitter where PyYAML has it (its wheels do); the pure-Python one took 10 ms of a calibration's
+    serial tail for one profile. The text is the same but for double-quoted strings (non-ASCII, control
+    characters) longer than the line width, which libyaml keeps on one line where the pure-Python emitter
+    folds them; both load back to the same profile."""
 
 
 def _represent_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
