@@ -61,7 +61,9 @@ class JointSolution:
     coordinate, ``rms_px`` the RMS corner error (both coordinates), ``per_view_px`` (n_views, 2) RMS per
     camera (nan where a camera saw nothing), ``used`` which input views survived, ``inliers`` per view and
     camera the kept-corner masks, ``residuals`` per view and camera (N, 2) px of ALL corners,
-    ``view_threshold_px`` the view outlier threshold (RMS over both cameras).
+    ``view_threshold_px`` the view outlier threshold (RMS over both cameras); ``converged`` False when the last
+    Levenberg-Marquardt run stopped at its step limit with the error still falling (the answer then depends
+    on the starting point).
     """
 
     K1: FloatArray
@@ -84,6 +86,7 @@ class JointSolution:
     corners_dropped: int
     view_threshold_px: float
     warp: FloatArray = field(default_factory=lambda: np.zeros(2))
+    converged: bool = True
 
     def std(self, name: str) -> float:
         """Standard deviation of a global parameter (inf when unobservable)."""
@@ -113,7 +116,9 @@ def _step(A: FloatArray, b: FloatArray, blocks: Blocks, lam: float) -> tuple[Flo
 
 
 def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks: Masks, active: list[int],
-                         iterations: int = 50, rel_tol: float = 1e-10, damping: float = START_DAMPING) -> None:
+                         iterations: int = 50, rel_tol: float = 1e-10, damping: float = START_DAMPING) -> bool:
+    """Refine ``state`` in place; False when ``iterations`` steps ran out with the error still falling (a step
+    no damping can make lower the error counts as converged: the solve is at a minimum or stuck there)."""
     lam = damping
     data = prepare(views, masks, active)
     ssr, _, A, b, blocks = normal_equations(state, views, masks, active, data)
@@ -121,7 +126,7 @@ def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks
         g0, (rv0, tv0) = state.global_vec(), state.copy_views()
         dg, dv = _step(A, b, blocks, lam)
         if lam <= _NEAR_GAUSS_NEWTON and -(float(b @ dg) + float(np.sum(blocks[2] * dv))) < rel_tol * max(ssr, 1e-12):
-            return  # a near-Gauss-Newton step that predicts a fall below the tolerance: converged here
+            return True  # a near-Gauss-Newton step that predicts a fall below the tolerance: converged here
         state.set_global(g0 + dg)
         for k, d in zip(active, dv, strict=True):
             state.rv[k], state.tv[k] = rv0[k] + d[:3], tv0[k] + d[3:]
@@ -131,13 +136,14 @@ def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks
             ssr, _, A, b, blocks = new
             lam = max(lam / 10, 1e-9)
             if converged:
-                return
+                return True
         else:
             state.set_global(g0)
             state.rv, state.tv = rv0, tv0
             lam *= 10
             if lam > 1e8:
-                return
+                return True
+    return False
 
 
 def _robust_threshold(values: FloatArray, k_mad: float = 5.0, k_median: float = 2.0, floor: float = 0.3) -> float:
@@ -252,16 +258,16 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
     view_thr: float | None = None
     final: Residuals | None = None
     for _ in range(max_rounds):
-        _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol,
-                             damping=damping)
+        converged = _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol,
+                                         damping=damping)
         changed, view_thr, res = _reject(state, views, masks, active, view_thr=view_thr, corner_k=corner_k,
                                          corner_floor_px=corner_floor_px, max_view_error_px=max_view_error_px)
         if not changed:
             final = res if len(res) == len(views) else None  # the state these residuals came from is final
             break
     else:
-        _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol,
-                             damping=damping)
+        converged = _levenberg_marquardt(state, views, masks, active, iterations=max_iterations, rel_tol=rel_tol,
+                                         damping=damping)
     if not np.all(np.isfinite(state.global_vec())):
         raise CalibrationError("the joint calibration solve diverged (non-finite parameters)",
                                hint="check the views: the board must be fully visible and sharp in both cameras")
@@ -294,4 +300,4 @@ def solve_joint(views: Sequence[StereoObservation], lens: LensModel, init: Joint
         used=tuple(k in active for k in range(len(views))),
         inliers=tuple((m[0], m[1]) for m in masks), residuals=tuple((r[0], r[1]) for r in residuals),
         corners_dropped=dropped, view_threshold_px=float(view_thr) if view_thr is not None else float("nan"),
-        warp=state.warp.copy())
+        warp=state.warp.copy(), converged=converged)

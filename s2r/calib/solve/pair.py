@@ -47,7 +47,7 @@ class PairSolution:
     ``cov_left/right`` the covariance of (fx, fy, cx, cy, free coefficients) per camera (joint solve only);
     ``warp_m`` the board's bend (x, y; metres at the board centre) and its std when it was solved;
     ``inliers`` per used view (left, right) the kept-corner masks (joint solve only: the warm start of the
-    resampling solves)."""
+    resampling solves); ``converged`` False when the joint solve stopped at its step limit still improving."""
 
     K1: FloatArray
     D1: FloatArray
@@ -80,6 +80,7 @@ class PairSolution:
     warp_m: FloatArray | None = None
     warp_std_m: FloatArray | None = None
     inliers: tuple[tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None], ...] = ()
+    converged: bool = True
 
 
 def _observations(names: Sequence[str], left: Sequence[Corners], right: Sequence[Corners],
@@ -164,6 +165,7 @@ def _joint(obs: list[StereoObservation], keep: list[int], init: RigInit | JointI
         rvecs=tuple(sol.rvecs[j] for j in used), tvecs=tuple(sol.tvecs[j] for j in used),
         warp_m=sol.warp.copy() if warp else None, inliers=tuple(sol.inliers[j] for j in used),
         warp_std_m=np.array([sol.std("warp x"), sol.std("warp y")]) if warp else None,
+        converged=sol.converged,
         method="s2r calibrate: OpenCV calibrateCameraExtended per camera to initialise, then one joint "
                f"Levenberg-Marquardt solve of both cameras ({lens.name}), extrinsics, board poses"
                + (" and the board's bend" if warp else ""))

@@ -32,7 +32,7 @@ from s2r.calib.solve.stereo_figures import (
     with_reported_std,
 )
 from s2r.calib.solve.synth import board_object_points
-from s2r.calib.solve.verdict import Verdict, stereo_verdict
+from s2r.calib.solve.verdict import NOT_CONVERGED, Verdict, stereo_verdict
 from s2r.calib.solve.views import (
     MIN_VIEWS,
     check_sizes,
@@ -276,6 +276,7 @@ def calibrate_stereo_detections(
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
     warnings = [*repeat_warning(repeats), *dropped_warning(dropped), *([] if held is None else held.blunder_warning()),
+                *([] if sol.converged else [NOT_CONVERGED]),
                 *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
@@ -287,7 +288,7 @@ def calibrate_stereo_detections(
         baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
         coverage=(cov_l.fraction, cov_r.fraction), model_warning=None if models is None else models.warning,
         unobservable=sol.unobservable, mismatched=len(sol.mismatched),
-        heldout_over_all=held is not None and held.judged_over_all)
+        heldout_over_all=held is not None and held.judged_over_all, converged=sol.converged)
     view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
                    for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(

@@ -44,7 +44,7 @@ from s2r.calib.solve.targetcal import (
     solve_pair,
     to_camera,
 )
-from s2r.calib.solve.verdict import stereo_verdict
+from s2r.calib.solve.verdict import NOT_CONVERGED, stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, Provenance, SourceFile, StereoProfile
@@ -223,7 +223,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
     warnings = [*_unobservable(sol.unobservable), *_uncertainty_warnings(profile),
-                *([] if heldout is None else heldout.blunder_warning()),
+                *([] if heldout is None else heldout.blunder_warning()), *([] if sol.converged else [NOT_CONVERGED]),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
@@ -233,7 +233,8 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
                              epipolar_px=epi, baseline_m=profile.baseline_m,
                              baseline_std_m=profile.extrinsics.baseline_std_m,
                              coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable,
-                             heldout_over_all=heldout is not None and heldout.judged_over_all)
+                             heldout_over_all=heldout is not None and heldout.judged_over_all,
+                             converged=sol.converged)
     # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
     # solve's residuals, as the report draws them
     empty = np.zeros((0, 2))

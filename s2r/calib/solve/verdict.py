@@ -12,10 +12,10 @@ baseline std / baseline       0.5 %     2 %
 board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
 ============================  ========  =========  ==============================================
 
-A better lens model on held-out views, unobservable parameters and dropped mismatched pairs make it at
-least "check". The verdict is the worst level. One camera (``--mono``): the same RMS, held-out and coverage
-limits, and the focal length's std relative to the focal length instead of the baseline's (good <= 0.5 %,
-check <= 2 %).
+A better lens model on held-out views, unobservable parameters, dropped mismatched pairs and a joint solve
+that stopped at its step limit still improving make it at least "check". The verdict is the worst level. One
+camera (``--mono``): the same RMS, held-out and coverage limits, and the focal length's std relative to the
+focal length instead of the baseline's (good <= 0.5 %, check <= 2 %).
 """
 
 from __future__ import annotations
@@ -26,9 +26,13 @@ from typing import Literal
 
 import numpy as np
 
-__all__ = ["Reason", "Verdict", "mono_verdict", "stereo_verdict"]
+__all__ = ["NOT_CONVERGED", "Reason", "Verdict", "mono_verdict", "stereo_verdict"]
 
 Level = Literal["good", "check", "poor"]
+#: The verdict's line and the warning when the joint solve stopped at its step limit still improving.
+NOT_CONVERGED = ("the joint solve stopped at its step limit with the error still falling: the answer depends on "
+                 "where it started, the views do not pin the lens model down; add views at varied tilt and "
+                 "distance, or use fewer lens terms (--distortion k1k2)")
 _ORDER = {"good": 0, "check": 1, "poor": 2}
 
 
@@ -60,9 +64,11 @@ def _grade(value: float, good: float, check: float) -> Level:
 
 def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: float, baseline_m: float,
                    baseline_std_m: float | None, coverage: Sequence[float], model_warning: str | None = None,
-                   unobservable: Sequence[str] = (), mismatched: int = 0, heldout_over_all: bool = False) -> Verdict:
+                   unobservable: Sequence[str] = (), mismatched: int = 0, heldout_over_all: bool = False,
+                   converged: bool = True) -> Verdict:
     """Judge a stereo calibration from its figures (see the module table); ``heldout_over_all``: the held-out
-    error is over every corner (more were left out than detector blunders explain)."""
+    error is over every corner (more were left out than detector blunders explain); ``converged`` False: the
+    joint solve stopped at its step limit still improving."""
     what = "stereo: pairs left out of the fit, one board pose per pair fitted to both cameras" + (
         "; over all corners: more than detector blunders fell beyond the blunder threshold" if heldout_over_all
         else "")
@@ -78,6 +84,8 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
     reasons += _common(coverage, model_warning, unobservable)
     if mismatched:
         reasons.append(Reason("check", f"{mismatched} mismatched pair(s) dropped"))
+    if not converged:
+        reasons.append(Reason("check", NOT_CONVERGED))
     level = max((r.level for r in reasons), key=lambda lv: _ORDER[lv])
     return Verdict(level, tuple(reasons))
 
