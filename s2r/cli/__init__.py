@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from typing import NoReturn, TextIO
 
 from s2r._version import __version__
-from s2r.cli import (  # _process first: it sets the BLAS threads before numpy loads
+from s2r.cli import (  # _process first: its process-wide settings (BLAS threads, malloc) precede numpy
     _process,  # noqa: F401
     calibrate_cmd,
     check_cmd,

@@ -245,7 +245,7 @@ def stereo_heldout(names: Sequence[str], left: Sequence[Corners], right: Sequenc
     w_result = _summary(w_outcomes, warped) if warped is not None and w_outcomes else None
     if not others or not sub_folds:
         return result, None, w_result, warped
-    rest = outcomes[k:] if small else [*outcomes[:k], *outcomes[k:]]
+    rest = outcomes[k:] if small else outcomes  # the chosen model's own folds double as its score
     ks = len(sub_folds)
     scored = {m: rest[ks * i:ks * (i + 1)] for i, m in enumerate([lens.name, *others])}
     order = [m for m in LENS_MODELS if m in scored]

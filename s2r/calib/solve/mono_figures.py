@@ -57,4 +57,4 @@ def mono_projection(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolut
         cov = np.full((4 + len(free), 4 + len(free)), np.nan)
     folds = [] if held is None else list(held.fold_intrinsics)
     return {"covariance": covariance_projection_map(sol.K, sol.D, size, cov, free),
-            "jackknife": projection_map(sol.K, sol.D, size, folds, jackknife=True)}
+            "jackknife": projection_map(sol.K, sol.D, size, folds)}

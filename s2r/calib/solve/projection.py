@@ -81,20 +81,19 @@ def _worst(dev: FloatArray, scale: float) -> FloatArray:
     return np.sqrt(np.maximum(np.linalg.eigvalsh(cov)[:, -1], 0.0))
 
 
-def projection_map(K: FloatArray, D: FloatArray, size: tuple[int, int], samples: Sequence[Intrinsics], *,
-                   jackknife: bool, distance_m: float = DISTANCE_M) -> ProjectionMap | None:
-    """The uncertainty map of camera (K, D) from alternative intrinsics ``samples`` (covariance draws, or
-    the jackknife folds' when ``jackknife``); None with fewer than 2 samples."""
-    if len(samples) < 2:
+def projection_map(K: FloatArray, D: FloatArray, size: tuple[int, int], folds: Sequence[Intrinsics], *,
+                   distance_m: float = DISTANCE_M) -> ProjectionMap | None:
+    """The uncertainty map of camera (K, D) from the jackknife folds' intrinsics ``folds``; None with fewer
+    than 2 folds."""
+    if len(folds) < 2:
         return None
     xs, ys, grid = _grid(size)
     w, h = size
     q = np.vstack([grid, [[(w - 1) / 2, (h - 1) / 2]]])  # the grid and the image centre, aligned together
     P = _points(q, K, D, distance_m)
-    dev = np.array([_aligned(P, q, Ks, Ds) - q for Ks, Ds in samples])
-    k = len(samples)
-    every = _worst(dev, (k - 1) / k if jackknife else 1.0 / (k - 1))
-    return _map(xs, ys, every, distance_m, "jackknife" if jackknife else "samples")
+    dev = np.array([_aligned(P, q, Ks, Ds) - q for Ks, Ds in folds])
+    k = len(folds)
+    return _map(xs, ys, _worst(dev, (k - 1) / k), distance_m, "jackknife")
 
 
 def _map(xs: FloatArray, ys: FloatArray, every: FloatArray, distance_m: float, source: str) -> ProjectionMap:

@@ -26,13 +26,14 @@ from s2r.calib.solve.stereo_figures import (
     board_text,
     choose_warp,
     dropped_warning,
+    fit_warnings,
     merge_repeated_views,
     projection_maps,
     repeat_warning,
     with_reported_std,
 )
 from s2r.calib.solve.synth import board_object_points
-from s2r.calib.solve.verdict import NOT_CONVERGED, Verdict, stereo_verdict
+from s2r.calib.solve.verdict import Verdict, stereo_verdict
 from s2r.calib.solve.views import (
     MIN_VIEWS,
     check_sizes,
@@ -275,8 +276,7 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
-    warnings = [*repeat_warning(repeats), *dropped_warning(dropped), *([] if held is None else held.blunder_warning()),
-                *([] if sol.converged else [NOT_CONVERGED]),
+    warnings = [*repeat_warning(repeats), *dropped_warning(dropped), *fit_warnings(held, sol),
                 *([models.warning] if models is not None and models.warning else []),
                 *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]

@@ -13,10 +13,11 @@ import numpy as np
 from s2r.calib.solve.heldout import BEND_SIGMAS, StereoHeldout
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
+from s2r.calib.solve.verdict import NOT_CONVERGED
 from s2r.calib.solve.views import REPEAT_PX, StereoViews, merge_repeats
 from s2r.profile import DroppedView
 
-__all__ = ["board_text", "choose_warp", "dropped_warning", "merge_repeated_views", "projection_maps",
+__all__ = ["board_text", "choose_warp", "dropped_warning", "fit_warnings", "merge_repeated_views", "projection_maps",
            "repeat_warning", "with_reported_std"]
 
 
@@ -53,7 +54,7 @@ def projection_maps(sol: PairSolution, held: StereoHeldout | None, size: tuple[i
                                            ("right", sol.K2, sol.D2, sol.cov_right))):
         folds = [] if held is None or len(held.fold_intrinsics) <= i else list(held.fold_intrinsics[i])
         out[side] = {"covariance": None if cov is None else covariance_projection_map(K, D, size, cov, free),
-                     "jackknife": projection_map(K, D, size, folds, jackknife=True)}
+                     "jackknife": projection_map(K, D, size, folds)}
     return out
 
 
@@ -96,6 +97,12 @@ def merge_repeated_views(views: StereoViews) -> tuple[StereoViews, list[DroppedV
         return views, []
     return replace(views, names=tuple(views.names[i] for i in keep), left=tuple(views.left[i] for i in keep),
                    right=tuple(views.right[i] for i in keep)), repeats
+
+
+def fit_warnings(held: StereoHeldout | None, sol: PairSolution) -> list[str]:
+    """The warnings of the solve's own figures: more held-out corners left out than detector blunders explain
+    (:meth:`StereoHeldout.blunder_warning`), a joint solve stopped at its step limit still improving."""
+    return [*([] if held is None else held.blunder_warning()), *([] if sol.converged else [NOT_CONVERGED])]
 
 
 def repeat_warning(repeats: Sequence[DroppedView]) -> list[str]:

@@ -25,7 +25,7 @@ from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
-from s2r.calib.solve.stereo_figures import repeat_warning, with_reported_std
+from s2r.calib.solve.stereo_figures import fit_warnings, repeat_warning, with_reported_std
 from s2r.calib.solve.target_honest import merge_repeat_pairs, pair_heldout
 from s2r.calib.solve.target_joint import joint_solve, lens_model_of
 from s2r.calib.solve.targetcal import (
@@ -44,7 +44,7 @@ from s2r.calib.solve.targetcal import (
     solve_pair,
     to_camera,
 )
-from s2r.calib.solve.verdict import NOT_CONVERGED, stereo_verdict
+from s2r.calib.solve.verdict import stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.profile import DroppedView, Extrinsics, Provenance, SourceFile, StereoProfile
@@ -223,7 +223,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
     warnings = [*_unobservable(sol.unobservable), *_uncertainty_warnings(profile),
-                *([] if heldout is None else heldout.blunder_warning()), *([] if sol.converged else [NOT_CONVERGED]),
+                *fit_warnings(heldout, sol),
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
