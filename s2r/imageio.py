@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import struct
 import sys
 import threading
 from collections.abc import Iterator
@@ -27,6 +28,8 @@ from s2r.limits import MAX_IMAGE_PX
 __all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log"]
 
 _PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
+#: A PNG chunk's length (big-endian, bytes of data) and type.
+_CHUNK_HEADER = struct.Struct(">I4s")
 #: Largest image side decoded (px): the profile's bound on camera sides. A PNG of a few hundred kB can
 #: declare 30000x30000 px, which OpenCV would allocate (2.7 GB in colour) before finding the data short.
 MAX_SIDE_PX = MAX_IMAGE_PX
@@ -78,9 +81,22 @@ def _truncated(data: bytes) -> str:
 def _plain_grey_png(data: bytes) -> bool:
     """Whether ``data`` is an 8-bit greyscale PNG (IHDR bit depth 8, colour type 0) without an eXIf chunk: its
     pixels decoded as they are equal ``IMREAD_GRAYSCALE``'s (which would also turn an image by its EXIF
-    orientation), and cost ~7 % less to decode."""
-    return (data.startswith(_PNG_MAGIC) and len(data) >= 26 and data[12:16] == b"IHDR" and data[24] == 8
-            and data[25] == 0 and b"eXIf" not in data)
+    orientation), and cost ~7 % less to decode.
+
+    Walks the chunk headers (a few dozen) rather than searching the whole file for ``eXIf`` (0.2 ms per
+    1280x720 image); a chunk list cut short or past the end is not plain (the decoder then judges the file)."""
+    if not (data.startswith(_PNG_MAGIC) and len(data) >= 26 and data[12:16] == b"IHDR" and data[24] == 8
+            and data[25] == 0):
+        return False
+    pos, end = 8, len(data)
+    while pos + 8 <= end:
+        length, kind = _CHUNK_HEADER.unpack_from(data, pos)
+        if kind == b"eXIf":
+            return False
+        if kind == b"IEND":
+            return True
+        pos += 12 + length
+    return False
 
 
 def declared_size(data: bytes) -> tuple[int, int] | None:

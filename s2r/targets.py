@@ -28,8 +28,9 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from s2r.errors import CalibrationError
-from s2r.fileio import parse_yaml, read_text_file
+from s2r.fileio import read_text_file
 from s2r.limits import MAX_SQUARE_M
+from s2r.safeparse import parse_yaml
 
 __all__ = [
     "ARUCO_DICTIONARIES",

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from s2r.imageio import decode_image_file
+from s2r.imageio import _plain_grey_png, decode_image_file
 
 
 def _bad_files(folder: Path) -> dict[str, Path]:
@@ -58,12 +58,17 @@ def test_calibration_reports_a_corrupt_view_once(tmp_path: Path) -> None:
     assert detection.status == "unreadable" and "corrupt PNG" in detection.detail
 
 
-def _png_with_chunk(png: bytes, kind: bytes, payload: bytes) -> bytes:
-    """``png`` with one more ancillary chunk right after IHDR (CRC computed as the PNG spec says)."""
+#: An EXIF block (big-endian TIFF) whose one tag is Orientation 6: the image is to be turned 90 degrees.
+_EXIF_TURNED = b"MM\x00*\x00\x00\x00\x08\x00\x01" + b"\x01\x12\x00\x03\x00\x00\x00\x01\x00\x06\x00\x00" + b"\x00" * 4
+
+
+def _png_with_chunk(png: bytes, kind: bytes, payload: bytes, at: int = 33) -> bytes:
+    """``png`` with one more ancillary chunk at byte ``at`` (default right after IHDR; ``len - 12`` is just
+    before IEND, after the image data), its CRC computed as the PNG spec says."""
     import zlib
 
     chunk = len(payload).to_bytes(4, "big") + kind + payload + zlib.crc32(kind + payload).to_bytes(4, "big")
-    return png[:33] + chunk + png[33:]
+    return png[:at] + chunk + png[at:]
 
 
 def test_grey_decoding_equals_opencvs_for_every_png_kind(tmp_path: Path) -> None:
@@ -76,6 +81,8 @@ def test_grey_decoding_equals_opencvs_for_every_png_kind(tmp_path: Path) -> None
         "grey8": plain,
         "grey8_trns": _png_with_chunk(plain, b"tRNS", (7).to_bytes(2, "big")),
         "grey8_exif": _png_with_chunk(plain, b"eXIf", b"MM\x00*\x00\x00\x00\x08\x00\x00"),
+        "grey8_exif_turned": _png_with_chunk(plain, b"eXIf", _EXIF_TURNED),
+        "grey8_exif_turned_after_data": _png_with_chunk(plain, b"eXIf", _EXIF_TURNED, at=len(plain) - 12),
         "grey16": bytes(cv2.imencode(".png", grey.astype(np.uint16) * 257)[1]),
         "colour": bytes(cv2.imencode(".png", colour)[1]),
         "colour_alpha": bytes(cv2.imencode(".png", np.dstack([colour, grey]))[1]),
@@ -86,5 +93,10 @@ def test_grey_decoding_equals_opencvs_for_every_png_kind(tmp_path: Path) -> None
         got, reason = decode_image_file(path, cv2.IMREAD_GRAYSCALE)
         want = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
         assert reason == "" and got is not None, name
-        assert got.dtype == np.uint8 and got.shape == (37, 53), name
+        assert got.dtype == np.uint8 and got.shape == want.shape, name
         assert np.array_equal(got, want), name
+    assert _plain_grey_png(cases["grey8"]) and _plain_grey_png(cases["grey8_trns"])
+    for name in ("grey8_exif", "grey8_exif_turned", "grey8_exif_turned_after_data", "grey16", "colour"):
+        assert not _plain_grey_png(cases[name]), name
+    assert not _plain_grey_png(plain[:-12]), "a chunk list without IEND is left to the decoder"
+    assert not _plain_grey_png(plain[:33] + (2**31).to_bytes(4, "big") + plain[37:]), "a chunk past the end"

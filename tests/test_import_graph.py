@@ -12,7 +12,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 #: calib, depth and render.
 LAYERS: dict[str, int] = {
     "_version": 0, "errors": 0, "progress": 0, "limits": 0,
-    "fileio": 1, "geometry": 1, "executor": 1, "sensor_model": 1,  # none of these four import each other
+    "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1, "sensor_model": 1,  # none of these import each other
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,

@@ -31,8 +31,9 @@ from s2r.drift.report import check_report_html
 from s2r.drift.source import StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
-from s2r.fileio import parse_yaml, read_text_file
+from s2r.fileio import read_text_file
 from s2r.progress import ProgressCallback, report
+from s2r.safeparse import parse_yaml
 
 __all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
 

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ValidationError
 
 from s2r.errors import FormatError
-from s2r.fileio import parse_yaml, read_text_file, sha256_file
+from s2r.fileio import read_text_file, sha256_file
 from s2r.formats.s2r_yaml import validation_message
 from s2r.geometry import ORTHONORMAL_TOL
 from s2r.profile import (
@@ -29,6 +29,7 @@ from s2r.profile import (
     SourceFile,
     StereoProfile,
 )
+from s2r.safeparse import parse_yaml
 
 __all__ = [
     "MAX_ABS_VALUE",

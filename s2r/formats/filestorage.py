@@ -2,7 +2,7 @@
 
 ``cv2.FileStorage`` is not fit for files from strangers: a matrix without ``cols:`` makes OpenCV 5.0 corrupt
 its heap (double free, exit 134/139 in some runs). This module reads the same format with PyYAML's safe
-loader (:class:`s2r.fileio.StrictSafeLoader`: duplicate keys refused) and with expat refusing any DOCTYPE (no
+loader (:class:`s2r.safeparse.StrictSafeLoader`: duplicate keys refused) and with expat refusing any DOCTYPE (no
 entity expansion), then validates every ``opencv-matrix``: ``rows``, ``cols``, ``dt`` and ``data`` present,
 sizes positive and at most :data:`MAX_MATRIX_ELEMENTS`, ``len(data) == rows * cols * channels``.
 
@@ -25,7 +25,8 @@ import yaml
 from numpy.typing import NDArray
 
 from s2r.errors import FormatError
-from s2r.fileio import StrictSafeLoader, parse_yaml, read_text_file, run_xml_parser, safe_xml_parser
+from s2r.fileio import read_text_file
+from s2r.safeparse import StrictSafeLoader, parse_yaml, run_xml_parser, safe_xml_parser
 
 __all__ = ["MAX_MATRIX_ELEMENTS", "NodeValue", "read_filestorage"]
 

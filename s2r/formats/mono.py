@@ -13,8 +13,9 @@ import numpy as np
 import yaml
 
 from s2r.errors import S2RError
-from s2r.fileio import atomic_write_text, parse_yaml, read_text_file
+from s2r.fileio import atomic_write_text, read_text_file
 from s2r.profile import MonoProfile
+from s2r.safeparse import parse_yaml
 
 __all__ = ["dump_mono", "is_mono_profile_file", "mono_to_kalibr_yaml", "mono_to_ros_yaml"]
 

@@ -14,8 +14,9 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from s2r.errors import ProfileError
-from s2r.fileio import atomic_write_text, parse_yaml, read_text_file
+from s2r.fileio import atomic_write_text, read_text_file
 from s2r.profile import MonoProfile, StereoProfile
+from s2r.safeparse import parse_yaml
 
 __all__ = [
     "dump_profile",

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from s2r.errors import SourceError
-from s2r.fileio import run_xml_parser, safe_xml_parser
+from s2r.safeparse import run_xml_parser, safe_xml_parser
 
 __all__ = ["XmlDoc", "parse_xml"]
 

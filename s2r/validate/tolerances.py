@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from s2r.errors import ValidateError
-from s2r.fileio import parse_yaml, read_text_file
+from s2r.fileio import read_text_file
+from s2r.safeparse import parse_yaml
 
 __all__ = ["Tolerances", "load_tolerances"]
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from s2r.calib.detect.cache import validate_entry
 from s2r.errors import S2RError, terminal_safe
-from s2r.fileio import parse_yaml
+from s2r.safeparse import parse_yaml
 
 FUZZ = settings(max_examples=60, deadline=None, derandomize=True, database=None)
 _JSON = st.recursive(st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats() | st.text(max_size=8),

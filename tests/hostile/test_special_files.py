@@ -39,3 +39,28 @@ def test_image_inputs_that_never_end_are_refused(tmp_path: Path) -> None:
     for path in _specials(tmp_path, ".png"):
         image, reason = decode_image_file(path)
         assert image is None and "not a regular file" in reason
+
+
+def test_a_file_that_grows_while_read_is_read_whole_or_refused(tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    """The read is sized from ``fstat`` (not the limit, which would allocate 512 MiB per image); a file longer
+    than ``fstat`` said (it grew in between) is read on, whole up to the limit and refused beyond it."""
+    from s2r import fileio
+
+    path = tmp_path / "growing.bin"
+    path.write_bytes(bytes(range(256)) * 4)
+    real_fstat = os.fstat
+
+    def stale_fstat(fd: int) -> os.stat_result:  # the size before the file grew to 1024 bytes
+        info = list(real_fstat(fd))
+        info[6] = 10  # st_size
+        return os.stat_result(info)
+
+    monkeypatch.setattr(fileio.os, "fstat", stale_fstat)
+    assert fileio.read_regular_file(path, limit=4096) == bytes(range(256)) * 4
+    with pytest.raises(fileio.NotARegularFile, match="grew while being read"):
+        fileio.read_regular_file(path, limit=100)
+    monkeypatch.undo()
+    assert fileio.read_regular_file(path, limit=1024) == bytes(range(256)) * 4
+    with pytest.raises(fileio.NotARegularFile, match="over the"):
+        fileio.read_regular_file(path, limit=1023)

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from s2r.errors import FormatError, S2RError
-from s2r.fileio import check_yaml_graph, parse_yaml
 from s2r.formats._common import as_matrix
+from s2r.safeparse import check_yaml_graph, parse_yaml
 from tests.hostile._limits import run_s2r
 
 

@@ -15,7 +15,8 @@ from pathlib import Path, PurePath
 from typing import Any
 
 from s2r.errors import S2RError
-from s2r.fileio import MAX_TEXT_BYTES, NotARegularFile, parse_yaml, read_regular_file
+from s2r.fileio import MAX_TEXT_BYTES, NotARegularFile, read_regular_file
+from s2r.safeparse import parse_yaml
 
 __all__ = ["bag_storage_files"]
 
