@@ -88,6 +88,17 @@ def is_flat(gray: NDArray[np.uint8]) -> bool:
     return hi - lo < FLAT_RANGE_GREY
 
 
+def _downscaled(gray: NDArray[np.uint8], factor: int) -> NDArray[np.uint8]:
+    """``gray`` area-averaged by the integer ``factor`` (itself when 1), the rows and columns beyond a whole
+    multiple of ``factor`` left out."""
+    if factor <= 1:
+        return gray
+    h, w = gray.shape[:2]
+    size = (max(1, w // factor), max(1, h // factor))
+    return np.asarray(cv2.resize(gray[:size[1] * factor, :size[0] * factor], size, interpolation=cv2.INTER_AREA),
+                      np.uint8)
+
+
 def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | None, str]:
     """Unrefined corners in full-resolution pixels, trying cheap detectors first.
 
@@ -104,18 +115,18 @@ def _find(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Corners | 
     """
     h, w = gray.shape[:2]
     factor = math.ceil(math.sqrt(w * h / DETECT_AREA_PX) - 1e-9)
-    small = gray
-    if factor > 1:
-        small_size = (max(1, w // factor), max(1, h // factor))
-        small = np.asarray(cv2.resize(gray[:small_size[1] * factor, :small_size[0] * factor], small_size,
-                                      interpolation=cv2.INTER_AREA), np.uint8)
+    if factor <= 2:  # detected at full resolution first: the copy is made only if that fails
+        found = _classic(gray, pattern)
+        if found is not None:
+            return found, "classic"
+    small = _downscaled(gray, factor)
     if factor > 2:
         found = _classic(small, pattern)
         if found is not None:
             return ((found + 0.5) * factor - 0.5).astype(np.float32), "classic"
-    found = _classic(gray, pattern)
-    if found is not None:
-        return found, "classic" if factor <= 2 else "classic-full"
+        found = _classic(gray, pattern)
+        if found is not None:
+            return found, "classic-full"
     if factor == 1 or _board_likely(small, pattern):
         found = _sector_based(small, pattern)
         if found is not None:
