@@ -20,16 +20,21 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
   detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
-  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Now
-  (second session of 2026-11-24, 2 cores, median of 7 interleaved repeats): whole run in-process 1.00x (plain
-  0.78 s, s2r 0.78 s), whole process 0.93x (0.95 s against 1.02 s), detection alone 1.68x. Earlier that day:
-  0.93x in-process, 0.78x whole process. The gain: glibc malloc keeping freed memory for reuse
-  (s2r/cli/_process.py: 140 000 page faults to 37 000), solves started from a small Marquardt damping (1-2
-  steps instead of 5-6), libyaml's emitter, the covariance projection map propagated instead of sampled. The
-  whole-process gap left is start-up: s2r loads pydantic and its models (about 0.1 s of CPU) where the plain
-  script loads only numpy and OpenCV; after detection s2r runs the joint solve, the bent-board solve, 4
-  converged jackknife folds and 16 short lens-comparison folds on two processes, against the plain script's
-  0.05 s of calibrateCamera and stereoCalibrate. On the set with 20 board-less pairs s2r's detection is 0.67x:
+  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Third
+  session of 2026-11-24 (2 cores, a shared and noisy host): whole run in-process 1.05x (plain 0.78 s, s2r
+  0.74 s, median of 9 interleaved repeats); whole process 0.94x here (0.94 s against 1.01 s) but 1.02-1.04x in
+  interleaved runs of the two commands from a shell (plain 0.93-0.97 s, s2r 0.91-0.93 s), the run-to-run spread
+  (+-5 %) being as large as the gap; detection alone 1.75x. The second session's figures were 1.00x in-process
+  and 0.93x whole process. This session's gain (about 40 ms of a 1 s run): PyYAML no longer loaded before
+  detection starts (s2r.safeparse), image reads sized from fstat instead of allocating the 512 MiB limit per
+  file, the PNG eXIf check walking chunk headers, no downscaled copy for images found at full resolution.
+  Earlier gains: glibc malloc keeping freed memory for reuse (s2r/cli/_process.py: 140 000 page faults to
+  37 000), solves started from a small Marquardt damping (1-2 steps instead of 5-6), libyaml's emitter, the
+  covariance projection map propagated instead of sampled. What is left: s2r loads pydantic and its models
+  (about 0.1 s of CPU, overlapped with detection) where the plain script loads only numpy and OpenCV; after
+  detection s2r runs the joint solve, the bent-board solve, 4 converged jackknife folds and 16 short
+  lens-comparison folds on two processes (0.27 s), against the plain script's 0.05 s of calibrateCamera and
+  stereoCalibrate. On the set with 20 board-less pairs s2r's detection is 0.68x:
   one view FAST_CHECK rejects (left/41.png) costs the plain retry 1.5 s (plain findChessboardCorners pays the
   same without FAST_CHECK); the flat blank frames skip the retry (41 s before that).
 - whole process: the plain script above as its own process (``python -c``) against the installed ``s2r
