@@ -16,6 +16,7 @@ from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS
+from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.models import ModelComparison, compare_models
 from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
@@ -167,9 +168,10 @@ def calibrate_mono_detections(dets: Sequence[Detection], *, pattern: tuple[int, 
                           provenance=Provenance(origin="real", method=_METHOD, calibration=quality,
                                                 sources=tuple(sources)))
     unobservable = [n for n, sd in zip(("fx", "fy", "cx", "cy"), sol.std[:4], strict=True) if not np.isfinite(sd)]
+    folds = fold_warnings([("the", profile.camera)])
     warnings = [*repeat_warning(repeats), *dropped_warning(outliers),
                 *([models.warning] if models is not None and models.warning else []),
-                *coverage_warnings("the", cov, spread)]
+                *coverage_warnings("the", cov, spread), *folds]
     for w in warnings:
         log.warning("%s", w)
     cam = profile.camera
@@ -178,7 +180,7 @@ def calibrate_mono_detections(dets: Sequence[Detection], *, pattern: tuple[int, 
     verdict = mono_verdict(
         rms_px=sol.rms_px, heldout_px=heldout,
         fx_px=cam.fx_px, fx_std_px=None if cam.std is None else cam.std.fx_px, coverage=cov.fraction,
-        model_warning=None if models is None else models.warning, unobservable=unobservable)
+        model_warning=None if models is None else models.warning, unobservable=unobservable, lens_folds=folds)
     return MonoCalibration(profile=profile, view_names=tuple(names[i] for i in keep),
                            view_errors_px=tuple(float(e) for e in sol.per_view_px), dropped=dropped,
                            threshold_px=thr, coverage=cov, spread=spread, warnings=tuple(warnings),

@@ -19,6 +19,7 @@ from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverag
 from s2r.calib.detect.pairs import PairDetection, display_name
 from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
+from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.models import ModelComparison
 from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
 from s2r.calib.solve.projection import ProjectionMap
@@ -276,9 +277,10 @@ def calibrate_stereo_detections(
         tilt_range_deg=spread.tilt_deg, distance_range_m=spread.distance_m, distortion_terms=distortion)
     profile = _stereo_profile(name, sol, pl, pr, size, distortion=distortion, sources=sources, quality=quality)
     epi = profile.provenance.calibration.epipolar_rms_px if profile.provenance.calibration else None
+    folds = fold_warnings([("left", profile.left), ("right", profile.right)])
     warnings = [*repeat_warning(repeats), *dropped_warning(dropped), *fit_warnings(held, sol),
                 *([models.warning] if models is not None and models.warning else []),
-                *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile),
+                *_unobservable_warnings(sol.unobservable), *_uncertainty_warnings(profile), *folds,
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
@@ -288,7 +290,7 @@ def calibrate_stereo_detections(
         baseline_m=profile.baseline_m, baseline_std_m=profile.extrinsics.baseline_std_m,
         coverage=(cov_l.fraction, cov_r.fraction), model_warning=None if models is None else models.warning,
         unobservable=sol.unobservable, mismatched=len(sol.mismatched),
-        heldout_over_all=held is not None and held.judged_over_all, converged=sol.converged)
+        heldout_over_all=held is not None and held.judged_over_all, converged=sol.converged, lens_folds=folds)
     view_errors = [ViewError(views.names[k], float(e[0]), float(e[1]), float(e[2]), used=True)
                    for k, e in zip(keep, sol.per_view, strict=True)]
     return StereoCalibration(

@@ -17,6 +17,7 @@ from pathlib import Path
 from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.lens import DEFAULT_LENS
+from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.stereo_figures import dropped_warning, repeat_warning
@@ -87,13 +88,15 @@ def calibrate_mono_target_detections(
     profile = MonoProfile(name=name, camera=to_camera(fit.solution, size, lens=lens, distortion=distortion),
                           provenance=Provenance(origin="real", method=_method(lens, False), calibration=quality,
                                                 sources=tuple(sources)))
-    warnings = [*repeat_warning(repeats), *dropped_warning(fit.outliers), *coverage_warnings("the", cov, spread)]
+    folds = fold_warnings([("the", profile.camera)])
+    warnings = [*repeat_warning(repeats), *dropped_warning(fit.outliers), *coverage_warnings("the", cov, spread),
+                *folds]
     for w in warnings:
         log.warning("%s", w)
     cam = profile.camera
     verdict = mono_verdict(rms_px=fit.solution.rms_px, heldout_px=None if held is None else held.heldout_px,
                            fx_px=cam.fx_px, fx_std_px=None if cam.std is None else cam.std.fx_px,
-                           coverage=cov.fraction)
+                           coverage=cov.fraction, lens_folds=folds)
     return MonoCalibration(profile=profile, view_names=tuple(v.name for v in used),
                            view_errors_px=tuple(float(e) for e in fit.solution.per_view_px), dropped=dropped,
                            threshold_px=fit.threshold, coverage=cov, spread=spread, warnings=tuple(warnings),

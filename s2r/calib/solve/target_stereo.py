@@ -22,6 +22,7 @@ from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
 from s2r.calib.solve.heldout import StereoHeldout
 from s2r.calib.solve.lens import DEFAULT_LENS
+from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
@@ -222,8 +223,9 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
     epi = epipolar_rms(profile, pv)
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
+    folds = fold_warnings([("left", profile.left), ("right", profile.right)])
     warnings = [*_unobservable(sol.unobservable), *_uncertainty_warnings(profile),
-                *fit_warnings(heldout, sol),
+                *fit_warnings(heldout, sol), *folds,
                 *coverage_warnings("left", cov_l, spread), *coverage_warnings("right", cov_r)]
     for w in warnings:
         log.warning("%s", w)
@@ -234,7 +236,7 @@ def _joint_result(joint_obs: list[StereoObservation], sol: PairSolution, views: 
                              baseline_std_m=profile.extrinsics.baseline_std_m,
                              coverage=(cov_l.fraction, cov_r.fraction), unobservable=sol.unobservable,
                              heldout_over_all=heldout is not None and heldout.judged_over_all,
-                             converged=sol.converged)
+                             converged=sol.converged, lens_folds=folds)
     # per used view, each camera's corners (empty when that camera did not see the board) aligned with the
     # solve's residuals, as the report draws them
     empty = np.zeros((0, 2))
@@ -280,7 +282,7 @@ def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
     warnings = [*_uncertainty_warnings(profile), *coverage_warnings("left", cov_l, spread),
-                *coverage_warnings("right", cov_r)]
+                *coverage_warnings("right", cov_r), *fold_warnings([("left", profile.left), ("right", profile.right)])]
     for w in warnings:
         log.warning("%s", w)
     view_errors = [ViewError(v.name, float(e[0]), float(e[1]), float(max(e)), used=True)

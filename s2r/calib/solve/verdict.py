@@ -13,7 +13,8 @@ board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
 ============================  ========  =========  ==============================================
 
 A better lens model on held-out views, unobservable parameters, dropped mismatched pairs and a joint solve
-that stopped at its step limit still improving make it at least "check". The verdict is the worst level. One
+that stopped at its step limit still improving make it at least "check"; a lens model that folds over inside
+the image (:mod:`s2r.calib.solve.lensfold`) makes it "poor". The verdict is the worst level. One
 camera (``--mono``): the same RMS, held-out and coverage limits, and the focal length's std relative to the
 focal length instead of the baseline's (good <= 0.5 %, check <= 2 %).
 """
@@ -65,10 +66,11 @@ def _grade(value: float, good: float, check: float) -> Level:
 def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: float, baseline_m: float,
                    baseline_std_m: float | None, coverage: Sequence[float], model_warning: str | None = None,
                    unobservable: Sequence[str] = (), mismatched: int = 0, heldout_over_all: bool = False,
-                   converged: bool = True) -> Verdict:
+                   converged: bool = True, lens_folds: Sequence[str] = ()) -> Verdict:
     """Judge a stereo calibration from its figures (see the module table); ``heldout_over_all``: the held-out
     error is over every corner (more were left out than detector blunders explain); ``converged`` False: the
-    joint solve stopped at its step limit still improving."""
+    joint solve stopped at its step limit still improving; ``lens_folds``: a camera's lens model folds over
+    inside its image (:func:`s2r.calib.solve.lensfold.fold_warnings`), poor whatever the other figures say."""
     what = "stereo: pairs left out of the fit, one board pose per pair fitted to both cameras" + (
         "; over all corners: more than detector blunders fell beyond the blunder threshold" if heldout_over_all
         else "")
@@ -81,7 +83,7 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
         rel = 100 * baseline_std_m / baseline_m
         reasons.append(Reason(_grade(rel, 0.5, 2.0), f"baseline {baseline_m * 1000:.2f} mm, std "
                                                       f"{baseline_std_m * 1000:.3g} mm ({rel:.2g} %)"))
-    reasons += _common(coverage, model_warning, unobservable)
+    reasons += _common(coverage, model_warning, unobservable, lens_folds)
     if mismatched:
         reasons.append(Reason("check", f"{mismatched} mismatched pair(s) dropped"))
     if not converged:
@@ -91,8 +93,9 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
 
 
 def mono_verdict(*, rms_px: float, heldout_px: float | None, fx_px: float, fx_std_px: float | None,
-                 coverage: float, model_warning: str | None = None, unobservable: Sequence[str] = ()) -> Verdict:
-    """Judge a single-camera calibration (see the module table)."""
+                 coverage: float, model_warning: str | None = None, unobservable: Sequence[str] = (),
+                 lens_folds: Sequence[str] = ()) -> Verdict:
+    """Judge a single-camera calibration (see the module table; ``lens_folds`` as :func:`stereo_verdict`)."""
     reasons = [Reason(_grade(rms_px, 0.5, 1.0), f"RMS reprojection error {rms_px:.3f} px"),
                *_heldout(heldout_px, rms_px)]
     if fx_std_px is None:
@@ -100,7 +103,7 @@ def mono_verdict(*, rms_px: float, heldout_px: float | None, fx_px: float, fx_st
     else:
         rel = 100 * fx_std_px / fx_px
         reasons.append(Reason(_grade(rel, 0.5, 2.0), f"fx {fx_px:.2f} px, std {fx_std_px:.2g} px ({rel:.2g} %)"))
-    reasons += _common([coverage], model_warning, unobservable)
+    reasons += _common([coverage], model_warning, unobservable, lens_folds)
     level = max((r.level for r in reasons), key=lambda lv: _ORDER[lv])
     return Verdict(level, tuple(reasons))
 
@@ -114,7 +117,8 @@ def _heldout(heldout_px: float | None, rms_px: float, what: str = "views left ou
     return [Reason(level, f"held-out error {heldout_px:.3f} px ({what})")]
 
 
-def _common(coverage: Sequence[float], model_warning: str | None, unobservable: Sequence[str]) -> list[Reason]:
+def _common(coverage: Sequence[float], model_warning: str | None, unobservable: Sequence[str],
+            lens_folds: Sequence[str] = ()) -> list[Reason]:
     worst = min(coverage) if coverage else 0.0
     cov_level: Level = "good" if worst >= 0.5 else "check" if worst >= 0.2 else "poor"
     out = [Reason(cov_level, "boards cover " + " / ".join(f"{100 * c:.0f} %" for c in coverage)
@@ -123,4 +127,5 @@ def _common(coverage: Sequence[float], model_warning: str | None, unobservable: 
         out.append(Reason("check", model_warning))
     if unobservable:
         out.append(Reason("check", f"not observable from these views: {', '.join(unobservable)}"))
+    out += [Reason("poor", fold) for fold in lens_folds]
     return out
