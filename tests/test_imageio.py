@@ -100,3 +100,28 @@ def test_grey_decoding_equals_opencvs_for_every_png_kind(tmp_path: Path) -> None
         assert not _plain_grey_png(cases[name]), name
     assert not _plain_grey_png(plain[:-12]), "a chunk list without IEND is left to the decoder"
     assert not _plain_grey_png(plain[:33] + (2**31).to_bytes(4, "big") + plain[37:]), "a chunk past the end"
+
+
+def test_png_chunks_past_the_end_are_refused_and_data_after_iend_is_not(tmp_path: Path) -> None:
+    """An 83-byte PNG whose text chunk declares 4 GB made OpenCV allocate 4.1 GB and take 3-10 s to fail: it
+    is refused from the chunk headers. Bytes after IEND (a trailer some tools append) are ignored, as OpenCV
+    does (they used to read as "truncated")."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, payload: bytes, length: int | None = None) -> bytes:
+        return (struct.pack(">I", len(payload) if length is None else length) + kind + payload
+                + struct.pack(">I", zlib.crc32(kind + payload)))
+
+    rows = b"".join(b"\x00" + bytes(range(i, i + 7)) for i in range(4))
+    head = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 7, 4, 8, 0, 0, 0, 0))
+    tail = chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
+    bomb = tmp_path / "bomb.png"
+    bomb.write_bytes(head + chunk(b"tEXt", b"abc", 0xFFFFFFFF) + tail)
+    image, reason = decode_image_file(bomb, cv2.IMREAD_GRAYSCALE)
+    assert image is None and reason.startswith("truncated PNG (chunk 'tEXt' declares 4294967295 bytes")
+    trailer = tmp_path / "trailer.png"
+    trailer.write_bytes(head + tail + b"appended by some tool" * 4)
+    image, reason = decode_image_file(trailer, cv2.IMREAD_GRAYSCALE)
+    want = cv2.imdecode(np.frombuffer(trailer.read_bytes(), np.uint8), cv2.IMREAD_GRAYSCALE)
+    assert reason == "" and image is not None and np.array_equal(image, want) and image[0, 6] == 6

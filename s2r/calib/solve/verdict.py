@@ -13,10 +13,10 @@ board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
 ============================  ========  =========  ==============================================
 
 A better lens model on held-out views, unobservable parameters, dropped mismatched pairs and a joint solve
-that stopped at its step limit still improving make it at least "check"; a lens model that folds over inside
-the image (:mod:`s2r.calib.solve.lensfold`) makes it "poor". The verdict is the worst level. One
-camera (``--mono``): the same RMS, held-out and coverage limits, and the focal length's std relative to the
-focal length instead of the baseline's (good <= 0.5 %, check <= 2 %).
+that stopped at its step limit still improving make it at least "check"; a lens model that cannot serve its
+whole image (it folds over or overstretches inside it: :mod:`s2r.calib.solve.lensfold`) makes it "poor". The
+verdict is the worst level. One camera (``--mono``): the same RMS, held-out and coverage limits, and the
+focal length's std relative to the focal length instead of the baseline's (good <= 0.5 %, check <= 2 %).
 """
 
 from __future__ import annotations
