@@ -22,9 +22,10 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
   Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Third
   session of 2026-11-24 (2 cores, a shared and noisy host): whole run in-process 1.05x (plain 0.78 s, s2r
-  0.74 s, median of 9 interleaved repeats); whole process 0.94x here (0.94 s against 1.01 s) but 1.02-1.04x in
-  interleaved runs of the two commands from a shell (plain 0.93-0.97 s, s2r 0.91-0.93 s), the run-to-run spread
-  (+-5 %) being as large as the gap; detection alone 1.75x. The second session's figures were 1.00x in-process
+  0.74 s, median of 9 interleaved repeats); whole process 0.94x here (0.94 s against 1.01 s) but 1.00-1.04x in
+  interleaved runs of the two commands from a shell (plain 0.93-0.98 s, s2r 0.91-0.98 s) or from a harness
+  that has not imported numpy and OpenCV itself (with them imported, s2r's child takes ~0.1 s longer and the
+  plain one does not; cause not found); detection alone 1.75x. The second session's figures were 1.00x in-process
   and 0.93x whole process. This session's gain (about 40 ms of a 1 s run): PyYAML no longer loaded before
   detection starts (s2r.safeparse), image reads sized from fstat instead of allocating the 512 MiB limit per
   file, the PNG eXIf check walking chunk headers, no downscaled copy for images found at full resolution.
@@ -189,12 +190,30 @@ def _linked_set(left: list[Path], right: list[Path], folder: Path) -> tuple[Path
     return folder / "left", folder / "right"
 
 
+def _shell_env() -> dict[str, str]:
+    """This process's environment as a shell would pass it on: without the ``LD_LIBRARY_PATH`` entries ``import
+    cv2`` prepends (its lib64 folder and an empty entry, which means the current folder), which every shared
+    library a child loads would otherwise be searched in first. (Not the whole story: from this harness the
+    whole-process figure reads 0.88-0.94x, from a shell or a harness that has not imported numpy and OpenCV
+    1.00-1.04x; the cause is not found.)"""
+    env = dict(os.environ)
+    prefix = os.path.join(os.path.dirname(cv2.__file__), "../../lib64") + ":"
+    path = env.get("LD_LIBRARY_PATH", "")
+    if path.startswith(prefix):
+        if path[len(prefix):]:
+            env["LD_LIBRARY_PATH"] = path[len(prefix):]
+        else:
+            del env["LD_LIBRARY_PATH"]
+    return env
+
+
 def plain_process(left: list[Path], right: list[Path]) -> tuple[float, int]:
     """The plain script as its own process: wall seconds from start to exit, pairs used."""
     with tempfile.TemporaryDirectory() as tmp:
         dl, dr = _linked_set(left, right, Path(tmp))
         t0 = time.perf_counter()
         out = subprocess.run([sys.executable, "-c", _PLAIN_SCRIPT, str(dl), str(dr)], capture_output=True, text=True,
+                             env=_shell_env(),
                              check=True)
         return time.perf_counter() - t0, int(out.stdout.split()[-1])
 
@@ -207,7 +226,7 @@ def s2r_process(left: list[Path], right: list[Path], jobs: int) -> tuple[float, 
         out = Path(tmp) / "out" / "rig.yaml"
         t0 = time.perf_counter()
         subprocess.run([str(script), "calibrate", tmp, "--pattern", "9x6", "--square", str(SQUARE), "-o", str(out),
-                        "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True)
+                        "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True, env=_shell_env())
         elapsed = time.perf_counter() - t0
         used = yaml.safe_load(out.read_text())["provenance"]["calibration"]["views_used"]
         return elapsed, int(used)
