@@ -77,8 +77,11 @@ def fold_radius(coefficients: Sequence[float]) -> float | None:
     stops growing); None when it grows all the way to 89.5 degrees or up to a denominator zero (where it
     grows without bound)."""
     r, _, den, rd = _radial(coefficients)
-    end = _first(den <= 0)
-    end = len(r) if end is None else end
+    return _fold(r, rd, _first(den <= 0))
+
+
+def _fold(r: FloatArray, rd: FloatArray, end: int | None) -> float | None:
+    """:func:`fold_radius` of the sampled curve ``rd(r)`` whose denominator first reaches zero at ``end``."""
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.diff(rd[:end]) / np.diff(r[:end])
     i = _first(~(slope >= MIN_SLOPE))  # NaN counts as not growing
@@ -98,7 +101,7 @@ def radial_problem(coefficients: Sequence[float], corner: float) -> str:
     module docstring), in words without the remedy; '' when nothing does."""
     r, num, den, rd = _radial(coefficients)
     end = _first(den <= 0)
-    fold = fold_radius(coefficients)
+    fold = _fold(r, rd, end)
     if fold is not None and fold < corner:
         return (f"folds over at {math.floor(100 * fold / corner)} % of the way from the principal point to the "
                 "farthest image corner (its distortion stops growing with the ray's angle: two rays land on one "
@@ -109,7 +112,7 @@ def radial_problem(coefficients: Sequence[float], corner: float) -> str:
     elif end is not None and num[end - 1] > 0:  # r_d grows without bound towards the denominator's zero
         r_corner = float(r[end])
     else:
-        top = float(np.nanmax(rd[:end])) if end != 0 else 0.0
+        top = float(np.nanmax(rd[:end]))  # the denominator is 1 on the axis: end is None or at least 1
         return (f"reaches only {math.floor(100 * top / corner)} % of the way from the principal point to the "
                 "farthest image corner even for rays at 89.5 degrees (pixels beyond have no ray)")
     stretch = corner / max(r_corner, 1e-12)

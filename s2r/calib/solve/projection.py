@@ -48,13 +48,6 @@ class ProjectionMap:
                 "source": self.source}
 
 
-def _grid(size: tuple[int, int]) -> tuple[FloatArray, FloatArray, FloatArray]:
-    w, h = size
-    xs, ys = np.linspace(0, w - 1, _GRID[0]), np.linspace(0, h - 1, _GRID[1])
-    q = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    return xs, ys, q
-
-
 def _points(q: FloatArray, K: FloatArray, D: FloatArray, distance_m: float) -> FloatArray:
     norm = cv2.undistortPoints(q.reshape(-1, 1, 2), K, D).reshape(-1, 2)
     return np.column_stack([norm * distance_m, np.full(len(norm), distance_m)])
@@ -81,16 +74,23 @@ def _worst(dev: FloatArray, scale: float) -> FloatArray:
     return np.sqrt(np.maximum(np.linalg.eigvalsh(cov)[:, -1], 0.0))
 
 
+def _probes(K: FloatArray, D: FloatArray, size: tuple[int, int], distance_m: float
+            ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The grid's ``xs``, ``ys``, the probed pixels ``q`` (the grid, then the image centre last) and the points
+    (camera frame, m) the camera (K, D) sees there at depth ``distance_m``."""
+    w, h = size
+    xs, ys = np.linspace(0, w - 1, _GRID[0]), np.linspace(0, h - 1, _GRID[1])
+    q = np.vstack([np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2), [[(w - 1) / 2, (h - 1) / 2]]])
+    return xs, ys, q, _points(q, K, D, distance_m)
+
+
 def projection_map(K: FloatArray, D: FloatArray, size: tuple[int, int], folds: Sequence[Intrinsics], *,
                    distance_m: float = DISTANCE_M) -> ProjectionMap | None:
     """The uncertainty map of camera (K, D) from the jackknife folds' intrinsics ``folds``; None with fewer
     than 2 folds."""
     if len(folds) < 2:
         return None
-    xs, ys, grid = _grid(size)
-    w, h = size
-    q = np.vstack([grid, [[(w - 1) / 2, (h - 1) / 2]]])  # the grid and the image centre, aligned together
-    P = _points(q, K, D, distance_m)
+    xs, ys, q, P = _probes(K, D, size, distance_m)
     dev = np.array([_aligned(P, q, Ks, Ds) - q for Ks, Ds in folds])
     k = len(folds)
     return _map(xs, ys, _worst(dev, (k - 1) / k), distance_m, "jackknife")
@@ -110,10 +110,7 @@ def covariance_projection_map(K: FloatArray, D: FloatArray, size: tuple[int, int
     cov = np.asarray(cov, np.float64)
     if not np.all(np.isfinite(cov)):
         return None
-    xs, ys, grid = _grid(size)
-    w, h = size
-    q = np.vstack([grid, [[(w - 1) / 2, (h - 1) / 2]]])
-    P = _points(q, K, D, distance_m)
+    xs, ys, _, P = _probes(K, D, size, distance_m)
     _, jac = cv2.projectPoints(P.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), K, D)
     J = np.asarray(jac, np.float64)
     J_rot, J_intr = J[:, :3], J[:, [6, 7, 8, 9, *(10 + i for i in free)]]
