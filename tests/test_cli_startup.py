@@ -98,3 +98,27 @@ def test_the_cli_keeps_freed_memory_for_reuse_unless_the_user_set_malloc() -> No
     assert tuned * 20 < default, (tuned, default)
     tunable = faults(GLIBC_TUNABLES="glibc.malloc.trim_threshold=131072:glibc.malloc.mmap_threshold=131072")
     assert tuned * 20 < tunable, (tuned, tunable)
+
+
+_PLUGIN_PROBE = """
+import os
+import s2r.cli, s2r.profile
+from pydantic.plugin import _loader
+print(repr(os.environ.get("PYDANTIC_DISABLE_PLUGINS")), _loader._plugins is None)
+"""
+
+
+def test_the_cli_skips_pydantic_plugin_scan_unless_the_user_set_it() -> None:
+    """``import s2r.cli`` sets ``PYDANTIC_DISABLE_PLUGINS=__all__``: building s2r's profile models then never
+    walks every installed distribution's entry points (pydantic's plugin lookup, ~10 ms of start-up); a value
+    the user set wins."""
+    import os
+
+    def probe(**env: str) -> list[str]:
+        clean = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+        out = subprocess.run([sys.executable, "-c", _PLUGIN_PROBE], capture_output=True, text=True, check=True,
+                             env={**clean, **env}).stdout
+        return out.split()
+
+    assert probe() == ["'__all__'", "True"]
+    assert probe(PYDANTIC_DISABLE_PLUGINS="") == ["''", "False"]  # the user's setting: plugins looked up

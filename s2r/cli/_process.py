@@ -4,6 +4,9 @@
   multiplies are small (a joint calibration's normal equations are about 22 x 4000), where OpenBLAS's extra
   threads mostly spin waiting for work: about 8 % of a 40-pair calibration's CPU time on 2 cores, and they
   compete with the workers for the cores. A value the user set (``OPENBLAS_NUM_THREADS``) is kept.
+- **No pydantic plugin scan.** The first pydantic model built looks for plugins among every installed
+  distribution's entry points (``importlib.metadata``): about 10 ms of every command's start-up, for plugins
+  s2r's command line has no use for. ``PYDANTIC_DISABLE_PLUGINS=__all__`` unless the user set it.
 - **glibc malloc keeps freed memory for reuse.** The calibration solves build and drop numpy arrays of
   0.1-1 MB thousands of times (Jacobians, normal equations). By default glibc serves each from a fresh
   ``mmap`` (above its 128 kB threshold) or gives the heap top back to the kernel on every free, and every
@@ -25,6 +28,7 @@ import os
 __all__ = ["MMAP_THRESHOLD_BYTES", "TRIM_THRESHOLD_BYTES"]
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 #: Allocations up to this size are served from the heap, not from a fresh mmap (bytes).
 MMAP_THRESHOLD_BYTES = 32 << 20

@@ -10,6 +10,7 @@ import pytest
 
 from s2r.calib.detect import Detection
 from s2r.calib.solve.joint import JointInit, solve_joint
+from s2r.calib.solve.jointterms import Masks, State, all_residuals, normal_equations
 from s2r.calib.solve.lens import LENS_MODELS
 from s2r.calib.solve.observations import BoardObservation, StereoObservation, chessboard_observation
 from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
@@ -158,3 +159,83 @@ def test_a_joint_solve_stopped_at_its_step_limit_says_so(monkeypatch: pytest.Mon
     cut = _calibrate(rig)
     assert not cut.solution.converged and NOT_CONVERGED in cut.warnings
     assert cut.verdict.level != "good" and any(r.text == NOT_CONVERGED for r in cut.verdict.reasons)
+
+
+def _fd_jacobian(state: State, views: list[StereoObservation], masks: Masks, active: list[int]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals (every inlier corner of both cameras, stacked) and their central-difference Jacobian over the
+    global parameters and then each active view's pose (rvec, tvec)."""
+    def stack() -> np.ndarray:
+        res = all_residuals(state, views, active)
+        return np.concatenate([r[masks[k][c]].reshape(-1) for k in active for c, r in enumerate(res[k])
+                               if r is not None and masks[k][c] is not None])
+
+    g0 = state.global_vec()
+    r0 = stack()
+    cols = []
+    for i in range(len(g0)):
+        h = 1e-6 * max(1.0, abs(g0[i]))
+        for sign in (1, -1):
+            g = g0.copy()
+            g[i] += sign * h
+            state.set_global(g)
+            cols.append(stack())
+        state.set_global(g0)
+        cols[-2:] = [(cols[-2] - cols[-1]) / (2 * h)]
+    for k in active:
+        for part in (state.rv, state.tv):
+            for j in range(3):
+                v0 = part[k][j]
+                outs = []
+                for sign in (1, -1):
+                    part[k][j] = v0 + sign * 1e-7
+                    outs.append(stack())
+                part[k][j] = v0
+                cols.append((outs[0] - outs[1]) / 2e-7)
+    return r0, np.column_stack(cols)
+
+
+@pytest.mark.parametrize(("lens_name", "warp"), [("k1k2p1p2", False), ("rational", True)])
+def test_normal_equations_equal_those_of_a_finite_difference_jacobian(lens_name: str, warp: bool) -> None:
+    """The solve's normal equations (J^T J and J^T r, the view blocks kept apart) equal those of a central-
+    difference Jacobian of the residuals, with the board bent, a view the right camera did not see, a view with
+    a subset of corners and a masked-out corner: the per-camera column bookkeeping (a camera's corners depend
+    only on its own intrinsics, the bend and, for the right camera, the pair) is pinned, whatever the speed-ups."""
+    rig = make_rig(31, views=6)
+    lens = LENS_MODELS[lens_name]
+    views = []
+    for i, (pl, pr) in enumerate(zip(rig.left, rig.right, strict=True)):
+        right: BoardObservation | None = chessboard_observation(rig.board, pr)
+        if i == 1:
+            right = None
+        elif i == 2 and right is not None:
+            right = right.subset(np.arange(len(pr)) % 3 != 0)
+        views.append(StereoObservation(str(i), chessboard_observation(rig.board, pl), right))
+    rng = np.random.default_rng(3)
+    R0, _ = cv2.Rodrigues(np.array([0.3, -0.2, 0.1]))
+    start = JointInit(np.array([[rig.left_lens.fx, 0, rig.left_lens.cx], [0, rig.left_lens.fy, rig.left_lens.cy],
+                                [0, 0, 1.0]]), np.array([-0.1, 0.02, 1e-3, -1e-3, 0.01, 0.02, -0.01, 0.005]),
+                      np.array([[rig.right_lens.fx, 0, rig.right_lens.cx], [0, rig.right_lens.fy,
+                                                                              rig.right_lens.cy], [0, 0, 1.0]]),
+                      np.array([-0.05, 0.01, -1e-3, 2e-3, 0.0, 0.01, 0.0, 0.0]), rig.R @ R0.T @ R0, rig.T,
+                      [rng.normal(scale=0.3, size=3) for _ in views],
+                      [np.array([0.0, 0.0, 0.8]) + rng.normal(scale=0.05, size=3) for _ in views],
+                      warp=np.array([2e-3, -1e-3]) if warp else None)
+    state = State(lens, start, warp=warp, views=views)
+    masks: Masks = [[None if o is None else np.ones(len(o.ids), bool)
+                                             for o in (v.left, v.right)] for v in views]
+    masks[0][0][5] = False  # type: ignore[index]
+    active = [0, 1, 2, 4, 5]  # view 3 left out
+    ssr, count, A, b, (Agv, Avv, bv) = normal_equations(state, views, masks, active)
+    r, J = _fd_jacobian(state, views, masks, active)
+    ng = len(state.global_vec())
+    Jg, Jv = J[:, :ng], J[:, ng:].reshape(len(r), len(active), 6)
+    assert count == r.size and ssr == pytest.approx(float(r @ r), rel=1e-12)
+    scale = np.sqrt(np.outer(np.diag(Jg.T @ Jg), np.diag(Jg.T @ Jg))) + 1e-30
+    assert np.max(np.abs(A - Jg.T @ Jg) / scale) < 1e-5
+    assert np.allclose(b, Jg.T @ r, rtol=1e-5, atol=1e-6 * np.abs(Jg.T @ r).max())
+    for j in range(len(active)):
+        jv = Jv[:, j, :]
+        assert np.allclose(Avv[j], jv.T @ jv, rtol=1e-5, atol=1e-6 * np.abs(jv.T @ jv).max())
+        assert np.allclose(bv[j], jv.T @ r, rtol=1e-5, atol=1e-6 * np.abs(jv.T @ r).max() + 1e-12)
+        assert np.allclose(Agv[j], Jg.T @ jv, rtol=1e-5, atol=1e-6 * np.abs(Jg.T @ jv).max() + 1e-12)

@@ -49,7 +49,7 @@ START_DAMPING = 1e-6
 WARM_DAMPING = 1e-9
 #: A step taken at this damping or less is close enough to Gauss-Newton that the decrease it predicts is a
 #: convergence test.
-_NEAR_GAUSS_NEWTON = 1e-3
+NEAR_GAUSS_NEWTON = 1e-3
 
 
 @dataclass(frozen=True)
@@ -125,7 +125,7 @@ def _levenberg_marquardt(state: State, views: Sequence[StereoObservation], masks
     for _ in range(iterations):
         g0, (rv0, tv0) = state.global_vec(), state.copy_views()
         dg, dv = _step(A, b, blocks, lam)
-        if lam <= _NEAR_GAUSS_NEWTON and -(float(b @ dg) + float(np.sum(blocks[2] * dv))) < rel_tol * max(ssr, 1e-12):
+        if lam <= NEAR_GAUSS_NEWTON and -(float(b @ dg) + float(np.sum(blocks[2] * dv))) < rel_tol * max(ssr, 1e-12):
             return True  # a near-Gauss-Newton step that predicts a fall below the tolerance: converged here
         state.set_global(g0 + dg)
         for k, d in zip(active, dv, strict=True):

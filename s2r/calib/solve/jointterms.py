@@ -20,7 +20,7 @@ from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 
 __all__ = ["Blocks", "CornerSet", "JointInit", "Masks", "State", "all_residuals", "camera_terms", "gather",
-           "normal_equations", "prepare", "rotations"]
+           "global_columns", "normal_equations", "prepare", "rotations"]
 
 FloatArray = NDArray[np.float64]
 
@@ -101,13 +101,15 @@ Blocks = tuple[FloatArray, FloatArray, FloatArray]
 @dataclass(frozen=True)
 class CornerSet:
     """One camera's (inlier) corners of the active views, concatenated view by view: board points (M, 3) m,
-    pixels (M, 2), each corner's view (position in ``active``) and its place within that view."""
+    pixels (M, 2), each corner's view (position in ``active``) and its place within that view, the most corners
+    of a view, and the board points per view padded with zeros to that many (n active views, width, 3)."""
 
     obj: FloatArray
     img: FloatArray
     seg: NDArray[np.intp]
     pos: NDArray[np.intp]
     width: int
+    board: FloatArray
 
 
 def gather(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int], cam: int
@@ -128,8 +130,10 @@ def gather(views: Sequence[StereoObservation], masks: Masks | None, active: Sequ
     starts = np.flatnonzero(np.r_[True, segs[1:] != segs[:-1]])
     counts = np.diff(np.r_[starts, len(segs)])
     pos = np.arange(len(segs)) - np.repeat(starts, counts)
-    return CornerSet(np.concatenate(objs).astype(np.float64), np.concatenate(imgs).astype(np.float64), segs, pos,
-                    int(counts.max()))
+    obj = np.concatenate(objs).astype(np.float64)
+    board = np.zeros((len(active), int(counts.max()), 3))
+    board[segs, pos] = obj
+    return CornerSet(obj, np.concatenate(imgs).astype(np.float64), segs, pos, int(counts.max()), board)
 
 
 def prepare(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int]
@@ -147,48 +151,68 @@ def rotations(rvecs: Sequence[FloatArray]) -> tuple[FloatArray, FloatArray]:
     return np.asarray(Rs, np.float64).reshape(-1, 3, 3), np.asarray(dRs, np.float64).reshape(-1, 3, 3, 3)
 
 
+def global_columns(state: State, cam: int) -> NDArray[np.intp]:
+    """The columns of the global parameters (see ``State.global_vec``) one camera's corners depend on: its own
+    intrinsics, the board bend, and for the right camera the pair's rotation and translation."""
+    ni, nw = state.n_intr, state.nw
+    e0 = 2 * ni + nw
+    cols = [*range(cam * ni, (cam + 1) * ni), *range(2 * ni, e0), *(range(e0, e0 + 6) if cam == 1 else ())]
+    return np.asarray(cols, np.intp)
+
+
 def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, FloatArray, FloatArray], *,
                  with_global: bool = True) -> tuple[FloatArray, FloatArray | None, FloatArray]:
-    """Residuals (M, 2) px, global Jacobian (M, 2, ng) (None without ``with_global``: pose-only fits) and view
-    Jacobian (M, 2, 6) of one camera's corners.
+    """Residuals (M, 2) px, global Jacobian (M, 2, k) over :func:`global_columns` only (the others are zero;
+    None without ``with_global``: pose-only fits) and view Jacobian (M, 2, 6) of one camera's corners.
 
     Board points go to the camera frame here (the view's pose, then the pair's for the right camera) and are
     projected in one call with a zero pose, whose translation Jacobian is d pixel / d point. ``poses``: the
     active views' rotations (n, 3, 3), their derivatives (n, 3, 3, 3) and translations (n, 3)."""
     ni, nw = state.n_intr, state.nw
-    e0 = 2 * ni + nw
     m = len(c.obj)
     R, dR, t = poses
-    obj = c.obj
+    n = len(R)
     if nw:
-        basis = state.warp_basis(obj)
-        obj = obj.copy()
-        obj[:, 2] += basis @ state.warp
-        dX_dw = R[c.seg][:, :, 2:3] * basis[:, None, :]  # (M, 3, 2)
-    X = (R[c.seg] @ obj[:, :, None])[:, :, 0] + t[c.seg]
-    dX_dr = (dR[c.seg].reshape(m, 9, 3) @ obj[:, :, None]).reshape(m, 3, 3).transpose(0, 2, 1)
+        basis = state.warp_basis(c.obj)
+        board = np.zeros((n, c.width, 3))
+        board[c.seg, c.pos] = c.obj
+        board[c.seg, c.pos, 2] += basis @ state.warp
+    else:
+        board = c.board
+    # Per view, the rows taking a board point to: the left camera frame (3), this camera's frame (3) and the
+    # derivatives of the latter by the view's rotation vector (9, row a * 3 + j = d X_a / d r_j). One batched
+    # product over the views' zero-padded points, then read back per corner: 10x faster than gathering
+    # (M, 3, 3) and (M, 3, 3, 3) arrays per corner. The pair's rotation is folded into the rows per view.
+    dR_a = dR.transpose(0, 2, 1, 3).reshape(n, 3, 9)  # [view, a, (j, k)]
     if cam == 1:
         R_lr, dR_lr = rotations([state.r_lr])
-        dX_drlr = (X @ dR_lr[0].reshape(9, 3).T).reshape(m, 3, 3).transpose(0, 2, 1)
-        X = X @ R_lr[0].T + state.t_lr
-        dX_dr = R_lr[0] @ dX_dr
-        if nw:
-            dX_dw = R_lr[0] @ dX_dw
+        Rp = R_lr[0]
+        R_cam, t_cam = Rp @ R, t @ Rp.T + state.t_lr
+        dR_a = Rp @ dR_a
+    else:
+        R_cam, t_cam = R, t
+    rows = np.concatenate([R, R_cam, dR_a.reshape(n, 9, 3)], axis=1)  # (n, 15, 3)
+    Y = (board @ rows.transpose(0, 2, 1))[c.seg, c.pos]  # (M, 15)
+    X = Y[:, 3:6] + t_cam[c.seg]
     pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
     jac = jac.reshape(m, 2, -1)
-    dp_dX = jac[:, :, 3:6]
-    dp_dt = dp_dX @ R_lr[0] if cam == 1 else dp_dX
-    Jv = np.concatenate([dp_dX @ dX_dr, dp_dt], axis=2)
+    dp_dX = np.ascontiguousarray(jac[:, :, 3:6])  # (M, 2, 3): d pixel / d point in this camera's frame
+    dp_dt = dp_dX if cam == 0 else (dp_dX.reshape(-1, 3) @ Rp).reshape(m, 2, 3)
+    Jv = np.empty((m, 2, 6))
+    Jv[:, :, :3] = dp_dX @ Y[:, 6:15].reshape(m, 3, 3)
+    Jv[:, :, 3:] = dp_dt
     if not with_global:
         return pts.reshape(m, 2) - c.img, None, Jv
-    Jg = np.zeros((m, 2, e0 + 6))
-    cols = [6, 7, 8, 9, *(10 + i for i in state.lens.free)]
-    Jg[:, :, cam * ni:(cam + 1) * ni] = jac[:, :, cols]
+    Jg = np.empty((m, 2, ni + nw + (6 if cam == 1 else 0)))  # the columns of global_columns(state, cam)
+    Jg[:, :, :ni] = jac[:, :, state.lens.jacobian_columns]
     if nw:
-        Jg[:, :, 2 * ni:e0] = dp_dX @ dX_dw
+        dX_dw = R_cam[c.seg, :, 2][:, :, None] * basis[:, None, :]  # (M, 3, 2)
+        Jg[:, :, ni:ni + nw] = dp_dX @ dX_dw
     if cam == 1:
-        Jg[:, :, e0:e0 + 3] = dp_dX @ dX_drlr
-        Jg[:, :, e0 + 3:] = dp_dX
+        X_left = Y[:, :3] + t[c.seg]
+        dX_drlr = (X_left @ dR_lr[0].transpose(1, 0, 2).reshape(9, 3).T).reshape(m, 3, 3)  # [a, j]
+        Jg[:, :, ni + nw:ni + nw + 3] = dp_dX @ dX_drlr
+        Jg[:, :, ni + nw + 3:] = dp_dX
     return pts.reshape(m, 2) - c.img, Jg, Jv
 
 
@@ -223,10 +247,11 @@ def normal_equations(state: State, views: Sequence[StereoObservation], masks: Ma
         Avv += PvT @ Pv
         bv += (PvT @ Pr)[:, :, 0]
         if Jg is not None:
-            Jg2 = Jg.reshape(-1, ng)
-            A += Jg2.T @ Jg2
-            b += Jg2.T @ r.reshape(-1)
-            Agv += padded(Jg, c, n).transpose(0, 2, 1) @ Pv
+            cols = global_columns(state, cam)
+            Jg2 = Jg.reshape(-1, len(cols))
+            A[np.ix_(cols, cols)] += Jg2.T @ Jg2
+            b[cols] += Jg2.T @ r.reshape(-1)
+            Agv[:, cols] += padded(Jg, c, n).transpose(0, 2, 1) @ Pv
     return ssr, count, A, b, (Agv, Avv, bv)
 
 

@@ -77,6 +77,13 @@ class LensModel:
     profile_model: str
     coef_names: tuple[str, ...]
 
+    @property
+    def jacobian_columns(self) -> slice | list[int]:
+        """Columns of the projection's Jacobian for fx, fy, cx, cy and the free coefficients (a slice when they
+        are consecutive: numpy copies a slice twice as fast as a list of columns)."""
+        cols = [6, 7, 8, 9, *(10 + i for i in self.free)]
+        return slice(6, cols[-1] + 1) if cols == list(range(6, cols[-1] + 1)) else cols
+
 
 _PB = ("k1", "k2", "p1", "p2", "k3")
 LENS_MODELS: dict[str, LensModel] = {

@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect.workers import worker_pool
-from s2r.calib.solve.joint import WARM_DAMPING, JointInit, JointSolution, solve_joint
-from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations
+from s2r.calib.solve.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, JointInit, JointSolution, solve_joint
+from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations, prepare
 from s2r.calib.solve.jointterms import State as SolveState
 from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
@@ -61,6 +61,8 @@ _FOLD_ITERATIONS = 50
 #: rational model's poorly determined k4-k6 keep a converged solve crawling for 50 steps.
 _SCORE_TOL = 1e-5
 _SCORE_ITERATIONS = 3
+#: Relative change of the sum of squares at which a held-out pose fit stops (the held-out error to ~1e-6).
+_POSE_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -116,24 +118,34 @@ def split_folds(n: int, folds: int = FOLDS) -> list[list[int]]:
 
 def _fit_poses(state: SolveState, views: Sequence[StereoObservation], masks: list[list[NDArray[np.bool_] | None]]
                ) -> None:
-    """Board poses of ``views`` (one per view, both cameras together) with the cameras and the pair fixed."""
+    """Board poses of ``views`` (one per view, both cameras together) with the cameras and the pair fixed.
+
+    Stops when a near-Gauss-Newton step predicts a fall of the sum of squares below ``_POSE_TOL`` of it, or
+    when a step changes it by less than that (up or down: at the minimum, rounding decides the sign; raising the
+    damping there only repeated the same evaluation up to 17 times)."""
     active = list(range(len(views)))
+    data = prepare(views, masks, active)  # the corners do not change between steps
     lam = WARM_DAMPING
-    ssr, _, _, _, (_, Avv, bv) = normal_equations(state, views, masks, active, poses_only=True)
+    ssr, _, _, _, (_, Avv, bv) = normal_equations(state, views, masks, active, data, poses_only=True)
     for _ in range(30):
         rv0, tv0 = state.copy_views()
         damp = lam * np.einsum("nii->ni", Avv)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
         dv = -np.linalg.solve(Avv + damp, bv[:, :, None])[:, :, 0]
+        if lam <= NEAR_GAUSS_NEWTON and -float(np.sum(bv * dv)) < _POSE_TOL * max(ssr, 1e-12):
+            return
         for k in active:
             state.rv[k], state.tv[k] = rv0[k] + dv[k, :3], tv0[k] + dv[k, 3:]
-        new_ssr, _, _, _, (_, new_Avv, new_bv) = normal_equations(state, views, masks, active, poses_only=True)
+        new_ssr, _, _, _, (_, new_Avv, new_bv) = normal_equations(state, views, masks, active, data,
+                                                                   poses_only=True)
         if np.isfinite(new_ssr) and new_ssr <= ssr:
-            done = ssr - new_ssr < 1e-6 * max(ssr, 1e-12)
+            done = ssr - new_ssr < _POSE_TOL * max(ssr, 1e-12)
             ssr, Avv, bv, lam = new_ssr, new_Avv, new_bv, max(lam / 10, 1e-9)
             if done:
                 return
         else:
             state.rv, state.tv = rv0, tv0
+            if np.isfinite(new_ssr) and new_ssr - ssr < _POSE_TOL * max(ssr, 1e-12):
+                return
             lam *= 10
             if lam > 1e8:
                 return
