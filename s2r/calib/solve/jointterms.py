@@ -20,7 +20,7 @@ from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 
 __all__ = ["Blocks", "CornerSet", "JointInit", "Masks", "State", "all_residuals", "camera_terms", "gather",
-           "global_columns", "normal_equations", "prepare", "rotations"]
+           "global_columns", "normal_equations", "prepare", "residuals", "rotations"]
 
 FloatArray = NDArray[np.float64]
 
@@ -115,25 +115,32 @@ class CornerSet:
 def gather(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int], cam: int
             ) -> CornerSet | None:
     """The corners of one camera (all of them when ``masks`` is None), or None when it saw none."""
-    objs, imgs, seg = [], [], []
+    objs, imgs, js, counts = [], [], [], []
     for j, k in enumerate(active):
         obs = views[k].left if cam == 0 else views[k].right
-        mask = None if obs is None else (np.ones(len(obs.ids), bool) if masks is None else masks[k][cam])
-        if obs is None or mask is None or not mask.any():
+        if obs is None:
             continue
-        objs.append(obs.obj[mask])
-        imgs.append(obs.img[mask])
-        seg.append(np.full(int(mask.sum()), j, np.intp))
+        mask = None if masks is None else masks[k][cam]
+        if masks is not None and (mask is None or not mask.any()):
+            continue
+        if mask is None or mask.all():
+            objs.append(obs.obj)
+            imgs.append(obs.img)
+        else:
+            objs.append(obs.obj[mask])
+            imgs.append(obs.img[mask])
+        js.append(j)
+        counts.append(len(objs[-1]))
     if not objs:
         return None
-    segs = np.concatenate(seg)
-    starts = np.flatnonzero(np.r_[True, segs[1:] != segs[:-1]])
-    counts = np.diff(np.r_[starts, len(segs)])
+    segs = np.repeat(np.asarray(js, np.intp), counts)
+    starts = np.cumsum(counts) - counts
     pos = np.arange(len(segs)) - np.repeat(starts, counts)
     obj = np.concatenate(objs).astype(np.float64)
-    board = np.zeros((len(active), int(counts.max()), 3))
+    width = max(counts)
+    board = np.zeros((len(active), width, 3))
     board[segs, pos] = obj
-    return CornerSet(obj, np.concatenate(imgs).astype(np.float64), segs, pos, int(counts.max()), board)
+    return CornerSet(obj, np.concatenate(imgs).astype(np.float64), segs, pos, width, board)
 
 
 def prepare(views: Sequence[StereoObservation], masks: Masks | None, active: Sequence[int]
@@ -172,13 +179,7 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
     m = len(c.obj)
     R, dR, t = poses
     n = len(R)
-    if nw:
-        basis = state.warp_basis(c.obj)
-        board = np.zeros((n, c.width, 3))
-        board[c.seg, c.pos] = c.obj
-        board[c.seg, c.pos, 2] += basis @ state.warp
-    else:
-        board = c.board
+    board = _bent_board(state, c, n)
     # Per view, the rows taking a board point to: the left camera frame (3), this camera's frame (3) and the
     # derivatives of the latter by the view's rotation vector (9, row a * 3 + j = d X_a / d r_j). One batched
     # product over the views' zero-padded points, then read back per corner: 10x faster than gathering
@@ -206,7 +207,7 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
     Jg = np.empty((m, 2, ni + nw + (6 if cam == 1 else 0)))  # the columns of global_columns(state, cam)
     Jg[:, :, :ni] = jac[:, :, state.lens.jacobian_columns]
     if nw:
-        dX_dw = R_cam[c.seg, :, 2][:, :, None] * basis[:, None, :]  # (M, 3, 2)
+        dX_dw = R_cam[c.seg, :, 2][:, :, None] * state.warp_basis(c.obj)[:, None, :]  # (M, 3, 2)
         Jg[:, :, ni:ni + nw] = dp_dX @ dX_dw
     if cam == 1:
         X_left = Y[:, :3] + t[c.seg]
@@ -214,6 +215,28 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
         Jg[:, :, ni + nw:ni + nw + 3] = dp_dX @ dX_drlr
         Jg[:, :, ni + nw + 3:] = dp_dX
     return pts.reshape(m, 2) - c.img, Jg, Jv
+
+
+def _bent_board(state: State, c: CornerSet, n: int) -> FloatArray:
+    """``c``'s board points per view, zero-padded (n, width, 3) m, with the board's bend when it is solved."""
+    if not state.nw:
+        return c.board
+    board = np.zeros((n, c.width, 3))
+    board[c.seg, c.pos] = c.obj
+    board[c.seg, c.pos, 2] += state.warp_basis(c.obj) @ state.warp
+    return board
+
+
+def residuals(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, FloatArray, FloatArray]
+              ) -> FloatArray:
+    """Residuals (M, 2) px of one camera's corners, as :func:`camera_terms` gives them, without Jacobians."""
+    R, _, t = poses
+    if cam == 1:
+        Rp = rotations([state.r_lr])[0][0]
+        R, t = Rp @ R, t @ Rp.T + state.t_lr
+    X = (_bent_board(state, c, len(R)) @ R.transpose(0, 2, 1))[c.seg, c.pos] + t[c.seg]
+    pts, _ = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
+    return pts.reshape(-1, 2) - c.img
 
 
 def padded(values: FloatArray, c: CornerSet, n: int) -> FloatArray:
@@ -264,7 +287,8 @@ def all_residuals(state: State, views: Sequence[StereoObservation], ks: Sequence
     for cam, c in enumerate(prepare(views, None, ks)):
         if c is None:
             continue
-        r, _, _ = camera_terms(state, cam, c, poses, with_global=False)
-        for j in np.unique(c.seg):
-            out[ks[int(j)]][cam] = r[c.seg == j]
+        r = residuals(state, cam, c, poses)
+        starts = np.flatnonzero(np.r_[True, c.seg[1:] != c.seg[:-1]])
+        for j, part in zip(c.seg[starts], np.split(r, starts[1:]), strict=True):
+            out[ks[int(j)]][cam] = part
     return {k: (v[0], v[1]) for k, v in out.items()}
