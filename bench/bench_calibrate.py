@@ -63,6 +63,7 @@ import yaml
 from s2r.calib import calibrate_stereo
 from s2r.calib.detect import DetectItem, detect_stream
 from s2r.calib.solve.synth import write_stereo_set
+from s2r.executor import child_environment
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, StereoProfile
 
 PATTERN, SQUARE = (9, 6), 0.025
@@ -190,30 +191,13 @@ def _linked_set(left: list[Path], right: list[Path], folder: Path) -> tuple[Path
     return folder / "left", folder / "right"
 
 
-def _shell_env() -> dict[str, str]:
-    """This process's environment as a shell would pass it on: without the ``LD_LIBRARY_PATH`` entries ``import
-    cv2`` prepends (its lib64 folder and an empty entry, which means the current folder), which every shared
-    library a child loads would otherwise be searched in first. (Not the whole story: from this harness the
-    whole-process figure reads 0.88-0.94x, from a shell or a harness that has not imported numpy and OpenCV
-    1.00-1.04x; the cause is not found.)"""
-    env = dict(os.environ)
-    prefix = os.path.join(os.path.dirname(cv2.__file__), "../../lib64") + ":"
-    path = env.get("LD_LIBRARY_PATH", "")
-    if path.startswith(prefix):
-        if path[len(prefix):]:
-            env["LD_LIBRARY_PATH"] = path[len(prefix):]
-        else:
-            del env["LD_LIBRARY_PATH"]
-    return env
-
-
 def plain_process(left: list[Path], right: list[Path]) -> tuple[float, int]:
     """The plain script as its own process: wall seconds from start to exit, pairs used."""
     with tempfile.TemporaryDirectory() as tmp:
         dl, dr = _linked_set(left, right, Path(tmp))
         t0 = time.perf_counter()
         out = subprocess.run([sys.executable, "-c", _PLAIN_SCRIPT, str(dl), str(dr)], capture_output=True, text=True,
-                             env=_shell_env(),
+                             env=child_environment(),
                              check=True)
         return time.perf_counter() - t0, int(out.stdout.split()[-1])
 
@@ -226,7 +210,7 @@ def s2r_process(left: list[Path], right: list[Path], jobs: int) -> tuple[float, 
         out = Path(tmp) / "out" / "rig.yaml"
         t0 = time.perf_counter()
         subprocess.run([str(script), "calibrate", tmp, "--pattern", "9x6", "--square", str(SQUARE), "-o", str(out),
-                        "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True, env=_shell_env())
+                        "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True, env=child_environment())
         elapsed = time.perf_counter() - t0
         used = yaml.safe_load(out.read_text())["provenance"]["calibration"]["views_used"]
         return elapsed, int(used)

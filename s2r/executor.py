@@ -11,6 +11,9 @@ from here, so a new backend is added once:
   ``distributed`` is imported only when Dask is asked for.
 
 Tasks must be module-level functions with picklable arguments and results.
+
+Programs s2r starts (a spawned Dask worker, the MuJoCo probe) get :func:`child_environment`: ``import cv2``
+leaves LD_LIBRARY_PATH ending in an empty entry, which the dynamic loader reads as the current folder.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures import as_completed as futures_completed
 from dataclasses import dataclass
@@ -31,7 +34,8 @@ from typing import Any, Generic, TypeVar
 
 from s2r.errors import S2RError
 
-__all__ = ["TaskOutcome", "TaskRunner", "local_pool", "open_runner"]
+__all__ = ["TaskOutcome", "TaskRunner", "child_environment", "children_search_no_relative_folder", "local_pool",
+           "open_runner"]
 
 ItemT = TypeVar("ItemT")
 ResultT = TypeVar("ResultT")
@@ -61,6 +65,45 @@ def _die_with_parent(parent_pid: int) -> None:
                 os._exit(1)
 
     threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
+
+
+def child_environment(env: Mapping[str, str] | None = None) -> dict[str, str]:
+    """``env`` (default ``os.environ``) for a program s2r starts, with the LD_LIBRARY_PATH entries that are not
+    absolute paths left out (the variable dropped when none is left).
+
+    ``import cv2`` (opencv-python) sets LD_LIBRARY_PATH to its own folder followed by the old value, and leaves a
+    trailing empty entry when there was none. The dynamic loader reads an empty or relative entry against the
+    current folder, so every child would first look there for its libraries (``libpython3.11.so.1.0``,
+    ``libc.so.6``, ...): a library planted in the folder s2r runs from would run inside the child."""
+    out = dict(os.environ if env is None else env)
+    value = out.get("LD_LIBRARY_PATH")
+    if value is not None:
+        kept = [entry for entry in value.split(os.pathsep) if os.path.isabs(entry)]
+        if kept:
+            out["LD_LIBRARY_PATH"] = os.pathsep.join(kept)
+        else:
+            del out["LD_LIBRARY_PATH"]
+    return out
+
+
+@contextlib.contextmanager
+def children_search_no_relative_folder() -> Iterator[None]:
+    """While open, ``os.environ``'s LD_LIBRARY_PATH is :func:`child_environment`'s, for children started by
+    code that takes no environment (multiprocessing's spawn, Dask's nannies); restored on exit."""
+    before = os.environ.get("LD_LIBRARY_PATH")
+    clean = child_environment().get("LD_LIBRARY_PATH")
+    _set_library_path(clean)
+    try:
+        yield
+    finally:
+        _set_library_path(before)
+
+
+def _set_library_path(value: str | None) -> None:
+    if value is None:
+        os.environ.pop("LD_LIBRARY_PATH", None)
+    else:
+        os.environ["LD_LIBRARY_PATH"] = value
 
 
 def local_pool(jobs: int) -> ProcessPoolExecutor:
@@ -132,13 +175,14 @@ def open_runner(*, workers: int, scheduler: str | None = None, dask: bool = Fals
         with local_pool(workers) as pool:
             yield TaskRunner(pool, kind="local", workers=workers)
         return
-    client, cluster = _dask_client(workers=workers, scheduler=scheduler)
-    try:
-        yield TaskRunner(client, kind="dask" if scheduler else "dask-local", workers=workers)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    with children_search_no_relative_folder():  # a local cluster's nannies spawn (and respawn) its workers
+        client, cluster = _dask_client(workers=workers, scheduler=scheduler)
+        try:
+            yield TaskRunner(client, kind="dask" if scheduler else "dask-local", workers=workers)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
 
 
 def _dask_client(*, workers: int, scheduler: str | None) -> tuple[Any, Any]:

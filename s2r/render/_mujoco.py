@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import RenderError
+from s2r.executor import child_environment
 from s2r.render.camera import PinholeView
 from s2r.render.world import Surface
 
@@ -121,7 +122,8 @@ def gl_unavailable_reason() -> str | None:
 
 def _probe(platform: str) -> str | None:
     """Try an 8x8 offscreen render with ``MUJOCO_GL=platform`` in a child process; None or why it failed."""
-    env = {**os.environ, "MUJOCO_GL": platform, "PYOPENGL_PLATFORM": platform} if platform else dict(os.environ)
+    env = child_environment({**os.environ, "MUJOCO_GL": platform, "PYOPENGL_PLATFORM": platform} if platform
+                            else os.environ)
     try:
         done = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True,
                               timeout=_PROBE_TIMEOUT_S, env=env, check=False)
