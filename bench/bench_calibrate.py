@@ -20,21 +20,24 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   s2r's default) against ``calibrate_stereo`` as ``s2r calibrate`` runs it first (a fresh corner cache,
   detection with the plain retry of rejected views, checks, repeat merging, the joint solve, the 4-fold stereo
   held-out error and jackknife, the lens models compared on held-out pairs and the projection uncertainty).
-  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Third
-  session of 2026-11-24 (2 cores, a shared and noisy host): whole run in-process 1.05x (plain 0.78 s, s2r
-  0.74 s, median of 9 interleaved repeats); whole process 0.94x here (0.94 s against 1.01 s) but 1.00-1.04x in
-  interleaved runs of the two commands from a shell (plain 0.93-0.98 s, s2r 0.91-0.98 s) or from a harness
-  that has not imported numpy and OpenCV itself (with them imported, s2r's child takes ~0.1 s longer and the
-  plain one does not; cause not found); detection alone 1.75x. The second session's figures were 1.00x in-process
-  and 0.93x whole process. This session's gain (about 40 ms of a 1 s run): PyYAML no longer loaded before
-  detection starts (s2r.safeparse), image reads sized from fstat instead of allocating the 512 MiB limit per
-  file, the PNG eXIf check walking chunk headers, no downscaled copy for images found at full resolution.
-  Earlier gains: glibc malloc keeping freed memory for reuse (s2r/cli/_process.py: 140 000 page faults to
-  37 000), solves started from a small Marquardt damping (1-2 steps instead of 5-6), libyaml's emitter, the
-  covariance projection map propagated instead of sampled. What is left: s2r loads pydantic and its models
-  (about 0.1 s of CPU, overlapped with detection) where the plain script loads only numpy and OpenCV; after
-  detection s2r runs the joint solve, the bent-board solve, 4 converged jackknife folds and 16 short
-  lens-comparison folds on two processes (0.27 s), against the plain script's 0.05 s of calibrateCamera and
+  Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Fourth
+  session of 2026-11-24 (2 cores, a shared and noisy host), median of 9 interleaved repeats: whole process
+  **1.13x** (plain 1.02 s, s2r 0.90 s), whole run in-process 1.10x (0.79 s against 0.71 s), detection alone
+  1.77x; interleaved runs of the two commands from a shell 1.08x (plain 1.00 s, s2r 0.93 s); from a Python
+  harness 1.07-1.11x, and 1.00x when that harness has imported numpy and OpenCV itself (the plain child runs
+  ~0.08 s faster then, s2r's does not; cause not found). The third session read 0.94x whole process here
+  (1.00-1.04x from a shell). This session's gain (post-detection 0.27 s -> 0.21 s, CPU 1.70 s -> 1.55 s): the
+  held-out pose fits stop instead of raising the damping up to 17 times at their minimum; the joint terms
+  rotate each view's zero-padded board points in one batched product and build each camera's Jacobian over its
+  own columns only; outlier checks evaluate residuals without Jacobians; pydantic's plugin scan skipped.
+  Earlier gains: PyYAML no longer loaded before detection starts (s2r.safeparse), image reads sized from fstat,
+  the PNG eXIf check walking chunk headers, no downscaled copy for images found at full resolution, glibc malloc
+  keeping freed memory for reuse (s2r/cli/_process.py: 140 000 page faults to 37 000), solves started from a
+  small Marquardt damping (1-2 steps instead of 5-6), libyaml's emitter, the covariance projection map
+  propagated instead of sampled. What is left: s2r loads pydantic and its models (about 0.1 s of CPU,
+  overlapped with detection) where the plain script loads only numpy and OpenCV; after detection s2r runs the
+  joint solve (~65 ms), then the bent-board solve, 4 converged jackknife folds and 16 short lens-comparison
+  folds on two processes (~0.12 s; 0.16 s on one), against the plain script's 0.05 s of calibrateCamera and
   stereoCalibrate. On the set with 20 board-less pairs s2r's detection is 0.68x:
   one view FAST_CHECK rejects (left/41.png) costs the plain retry 1.5 s (plain findChessboardCorners pays the
   same without FAST_CHECK); the flat blank frames skip the retry (41 s before that).
