@@ -22,6 +22,7 @@ import contextlib
 import ctypes
 import multiprocessing as mp
 import os
+import re
 import signal
 import sys
 import threading
@@ -68,19 +69,22 @@ def _die_with_parent(parent_pid: int) -> None:
 
 
 def child_environment(env: Mapping[str, str] | None = None) -> dict[str, str]:
-    """``env`` (default ``os.environ``) for a program s2r starts, with the LD_LIBRARY_PATH entries that are not
-    absolute paths left out (the variable dropped when none is left).
+    """``env`` (default ``os.environ``) for a program s2r starts, with only the LD_LIBRARY_PATH entries that do
+    not depend on the current folder: absolute paths and ``$ORIGIN`` ones (the executable's folder); the variable
+    is dropped when none is left.
 
     ``import cv2`` (opencv-python) sets LD_LIBRARY_PATH to its own folder followed by the old value, and leaves a
     trailing empty entry when there was none. The dynamic loader reads an empty or relative entry against the
     current folder, so every child would first look there for its libraries (``libpython3.11.so.1.0``,
-    ``libc.so.6``, ...): a library planted in the folder s2r runs from would run inside the child."""
+    ``libc.so.6``, ...): a library planted in the folder s2r runs from would run inside the child. glibc splits
+    the variable at ``;`` as well as ``:``, so both separate entries here."""
     out = dict(os.environ if env is None else env)
     value = out.get("LD_LIBRARY_PATH")
     if value is not None:
-        kept = [entry for entry in value.split(os.pathsep) if os.path.isabs(entry)]
+        kept = [entry for entry in re.split(r"[:;]", value)
+                if entry.startswith(("/", "$ORIGIN", "${ORIGIN}"))]
         if kept:
-            out["LD_LIBRARY_PATH"] = os.pathsep.join(kept)
+            out["LD_LIBRARY_PATH"] = ":".join(kept)
         else:
             del out["LD_LIBRARY_PATH"]
     return out

@@ -22,6 +22,8 @@ from s2r.executor import child_environment, children_search_no_relative_folder
     ("/opt/cv2/../../lib64:", "/opt/cv2/../../lib64"),  # what import cv2 leaves
     (":", None), ("", None), ("lib:./x:/usr/local/lib::", "/usr/local/lib"),
     ("/a:/b", "/a:/b"),
+    ("/opt/x;", "/opt/x"), ("/opt/x;rel:/b", "/opt/x:/b"),  # glibc splits at ';' too
+    ("$ORIGIN/../lib:", "$ORIGIN/../lib"), ("${ORIGIN}/lib", "${ORIGIN}/lib"),  # the executable's folder
 ])
 def test_child_environment_keeps_only_absolute_library_folders(value: str, expected: str | None) -> None:
     env = child_environment({"LD_LIBRARY_PATH": value, "HOME": "/h"})

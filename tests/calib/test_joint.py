@@ -239,3 +239,20 @@ def test_normal_equations_equal_those_of_a_finite_difference_jacobian(lens_name:
         assert np.allclose(Avv[j], jv.T @ jv, rtol=1e-5, atol=1e-6 * np.abs(jv.T @ jv).max())
         assert np.allclose(bv[j], jv.T @ r, rtol=1e-5, atol=1e-6 * np.abs(jv.T @ r).max() + 1e-12)
         assert np.allclose(Agv[j], Jg.T @ jv, rtol=1e-5, atol=1e-6 * np.abs(Jg.T @ jv).max() + 1e-12)
+
+
+def test_residuals_skip_an_observation_without_corners() -> None:
+    """A camera's observation with no corners at all has no residuals (None), as a camera that saw nothing."""
+    rig = make_rig(31, views=6)
+    lens = LENS_MODELS["k1k2p1p2"]
+    empty = BoardObservation(np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 2)))
+    views = [StereoObservation(str(i), chessboard_observation(rig.board, pl),
+                               empty if i == 2 else chessboard_observation(rig.board, pr))
+             for i, (pl, pr) in enumerate(zip(rig.left, rig.right, strict=True))]
+    K = np.array([[rig.left_lens.fx, 0, rig.left_lens.cx], [0, rig.left_lens.fy, rig.left_lens.cy], [0, 0, 1.0]])
+    state = State(lens, JointInit(K, np.zeros(5), K, np.zeros(5), rig.R, rig.T, [np.full(3, 0.1)] * 6,
+                                  [np.array([0.0, 0.0, 0.8])] * 6), views=views)
+    only = all_residuals(state, views, [2])
+    assert only[2][0] is not None and only[2][0].shape == (len(rig.board), 2) and only[2][1] is None
+    every = all_residuals(state, views, list(range(6)))
+    assert every[2][1] is None and all(every[k][1] is not None for k in (0, 1, 3, 4, 5))

@@ -118,7 +118,7 @@ def gather(views: Sequence[StereoObservation], masks: Masks | None, active: Sequ
     objs, imgs, js, counts = [], [], [], []
     for j, k in enumerate(active):
         obs = views[k].left if cam == 0 else views[k].right
-        if obs is None:
+        if obs is None or not len(obs.ids):
             continue
         mask = None if masks is None else masks[k][cam]
         if masks is not None and (mask is None or not mask.any()):
