@@ -208,6 +208,21 @@ def test_target_pair_has_a_stereo_heldout_error_both_std_and_merges_repeats(kind
     assert sa and sb and abs(sb / sa - 1) < 0.15
 
 
+@pytest.mark.parametrize("kind", ["fisheye", "charuco"])
+def test_target_pair_with_fixed_intrinsics_has_a_verdict(kind: str) -> None:
+    """ROS's way (--fix-intrinsics) on a --target is judged too: the verdict names the stereo RMS, the epipolar
+    error and the baseline's std (there is no held-out error on this path); it used to carry no verdict at all."""
+    pairs, target, _ = _target_pairs(kind, 14, 4)
+    res = calibrate_stereo_target_detections(pairs, target=target, lens="fisheye" if kind == "fisheye" else "pinhole",
+                                             fix_intrinsics=True)
+    assert res.verdict is not None
+    levels = {r.text.split(" ")[0] + " " + r.text.split(" ")[1]: r.level for r in res.verdict.reasons}
+    assert levels["stereo RMS"] == levels["epipolar RMS"] == "good", res.verdict
+    assert any(k.startswith("baseline") and v == "good" for k, v in levels.items()), res.verdict
+    assert not any("held-out" in r.text for r in res.verdict.reasons)
+    assert res.figures()["verdict"]["level"] == res.verdict.level  # the --json and the console carry it
+
+
 def test_lens_models_compared_on_the_same_folds_flag_a_missing_k3() -> None:
     """A lens with k3 = 0.2 (not in the default k1k2p1p2): plumb_bob's held-out error is clearly lower."""
     rig = make_rig(32, views=16, noise_px=0.05, k3_max=0.3)

@@ -281,18 +281,23 @@ def _fixed_result(solved: _Pair, fit_l: MonoFit, fit_r: MonoFit, size: tuple[int
     epi = epipolar_rms(profile, views)
     profile = profile.model_copy(update={"provenance": profile.provenance.model_copy(
         update={"calibration": quality.model_copy(update={"epipolar_rms_px": epi})})})
+    folds = fold_warnings([("left", profile.left), ("right", profile.right)])
     warnings = [*_uncertainty_warnings(profile), *coverage_warnings("left", cov_l, spread),
-                *coverage_warnings("right", cov_r), *fold_warnings([("left", profile.left), ("right", profile.right)])]
+                *coverage_warnings("right", cov_r), *folds]
     for w in warnings:
         log.warning("%s", w)
     view_errors = [ViewError(v.name, float(e[0]), float(e[1]), float(max(e)), used=True)
                    for v, e in zip(views, st.per_view_px, strict=True)]
+    # no held-out error on this path: the mono fits it holds fixed are not resampled
+    verdict = stereo_verdict(rms_px=st.rms_px, heldout_px=None, epipolar_px=epi, baseline_m=profile.baseline_m,
+                             baseline_std_m=profile.extrinsics.baseline_std_m,
+                             coverage=(cov_l.fraction, cov_r.fraction), lens_folds=folds)
     return StereoCalibration(
         profile=profile, views=tuple(view_errors + solved.outliers), dropped=tuple(dropped),
         threshold_px=solved.threshold, coverage_left=cov_l, coverage_right=cov_r, spread=spread,
         epipolar_rms_px=epi, warnings=tuple(warnings), used_names=tuple(v.name for v in views),
         corners_left=tuple(v.left for v in views), corners_right=tuple(v.right for v in views),
-        reordered=tuple(reordered), board=target.describe())
+        reordered=tuple(reordered), board=target.describe(), verdict=verdict)
 
 
 def _unobservable(names: Sequence[str]) -> list[str]:
