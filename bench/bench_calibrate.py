@@ -23,9 +23,10 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   Issue 22 (40 pairs): 0.65x before its changes (the issue's figure; 0.57x measured here before them). Fourth
   session of 2026-11-24 (2 cores, a shared and noisy host), median of 9 interleaved repeats: whole process
   **1.13x** (plain 1.02 s, s2r 0.90 s), whole run in-process 1.10x (0.79 s against 0.71 s), detection alone
-  1.77x; interleaved runs of the two commands from a shell 1.08x (plain 1.00 s, s2r 0.93 s); from a Python
-  harness 1.07-1.11x, and 1.00x when that harness has imported numpy and OpenCV itself (the plain child runs
-  ~0.08 s faster then, s2r's does not; cause not found). The third session read 0.94x whole process here
+  1.77x; interleaved runs of the two commands from a shell 1.08-1.10x (plain 0.97-1.00 s, s2r 0.88-0.93 s); from
+  a Python harness 1.09x over 20 shuffled rounds (s2r faster in 19), and 1.04x when that harness has imported
+  numpy and OpenCV itself (s2r faster in 12 of 20; 0.92-1.00x in 5-round runs): the plain child runs ~0.06 s
+  faster then, s2r's does not (cause not found). The third session read 0.94x whole process here
   (1.00-1.04x from a shell). This session's gain (post-detection 0.27 s -> 0.21 s, CPU 1.70 s -> 1.55 s): the
   held-out pose fits stop instead of raising the damping up to 17 times at their minimum; the joint terms
   rotate each view's zero-padded board points in one batched product and build each camera's Jacobian over its
