@@ -17,9 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import detect_board
+from s2r.calib.detect.chessboard import board_object_points
 from s2r.quality.metrics import Plane
 
-__all__ = ["BoardView", "board_object_points", "find_board", "normalised_rays", "roi_mask", "roi_quad"]
+__all__ = ["BoardView", "find_board", "normalised_rays", "roi_mask", "roi_quad"]
 
 FloatArray = NDArray[np.float64]
 
@@ -32,13 +33,6 @@ class BoardView:
     T_cam_board: FloatArray
     plane: Plane
     reprojection_px: float
-
-
-def board_object_points(pattern: tuple[int, int], square_m: float) -> NDArray[np.float32]:
-    """(N, 3) inner-corner positions in the board frame (metres), row-major over ``(cols, rows)``."""
-    cols, rows = pattern
-    grid = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2).astype(np.float32) * np.float32(square_m)
-    return np.column_stack([grid, np.zeros(len(grid), np.float32)])
 
 
 def find_board(grey: NDArray[np.uint8], K: FloatArray, D: FloatArray, pattern: tuple[int, int],

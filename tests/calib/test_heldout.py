@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import Detection, detect_board
-from s2r.calib.solve.resample import PARAMETERS, split_folds
+from s2r.calib.solve.resample import PARAMETERS, FoldTask, split_folds
 from s2r.calib.solve.stereo import calibrate_stereo_detections
 from s2r.profile import StereoProfile
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
@@ -104,23 +104,29 @@ def test_a_flat_frame_skips_the_plain_retry(monkeypatch: pytest.MonkeyPatch) -> 
     assert not chessboard.is_flat(dim)  # 40 px squares, 30 grey levels apart
 
 
+def _fold_tasks(seed: int, *, views: int, noise_px: float) -> list[FoldTask]:
+    """The jackknife fold tasks (default lens model) of a calibration of an independent rig."""
+    from s2r.calib.solve import heldout
+    from s2r.calib.solve.lens import lens_model
+    from s2r.calib.solve.synth import board_object_points
+
+    rig = make_rig(seed, views=views, noise_px=noise_px, k3_max=0.0)
+    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
+                                      compare=False)
+    obs = heldout._observations(res.used_names, res.corners_left, res.corners_right,
+                                board_object_points(PATTERN, SQUARE_M))
+    return heldout._tasks(obs, res.solution, lens_model("k1k2p1p2"), split_folds(len(obs)), None)
+
+
 def test_jackknife_folds_are_converged_solves() -> None:
     """The jackknife reads each fold's parameters, so a fold solve must reach its own optimum, not stop near the
     full solution it starts from (which shrank the jackknife 1.5-3x on real sets): every fold's intrinsics and
     baseline equal a solve of the same training views run to a far tighter rule. The lens-model comparison's
     folds, read only for their held-out error, may stop early."""
-    from s2r.calib.solve import heldout
     from s2r.calib.solve.joint import solve_joint
-    from s2r.calib.solve.lens import lens_model
     from s2r.calib.solve.resample import run_fold
-    from s2r.calib.solve.synth import board_object_points
 
-    rig = make_rig(33, views=14, noise_px=0.3, k3_max=0.0)
-    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
-                                      compare=False)
-    obs = heldout._observations(res.used_names, res.corners_left, res.corners_right,
-                                board_object_points(PATTERN, SQUARE_M))
-    tasks = heldout._tasks(obs, res.solution, lens_model("k1k2p1p2"), split_folds(len(obs)), None)
+    tasks = _fold_tasks(33, views=14, noise_px=0.3)
     assert len(tasks) == 4 and not any(t.score_only for t in tasks)
     for task in tasks:
         fold = run_fold(task)
@@ -136,16 +142,9 @@ def test_heldout_pose_fits_reach_their_minimum(monkeypatch: pytest.MonkeyPatch) 
     error equals that of a pose fit run to a far tighter rule within 1e-5 px (stopping one step short of the
     minimum moved them by up to 2e-3 px on a real set, enough to move a corner across the blunder threshold),
     in at most a few evaluations of the normal equations."""
-    from s2r.calib.solve import heldout, resample
-    from s2r.calib.solve.lens import lens_model
-    from s2r.calib.solve.synth import board_object_points
+    from s2r.calib.solve import resample
 
-    rig = make_rig(34, views=16, noise_px=0.4, k3_max=0.0)
-    res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
-                                      compare=False)
-    obs = heldout._observations(res.used_names, res.corners_left, res.corners_right,
-                                board_object_points(PATTERN, SQUARE_M))
-    tasks = heldout._tasks(obs, res.solution, lens_model("k1k2p1p2"), split_folds(len(obs)), None)
+    tasks = _fold_tasks(34, views=16, noise_px=0.4)
     calls = []
     real = resample.normal_equations
 

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["DETECT_AREA_PX", "FLAT_RANGE_GREY", "detect_board", "is_flat", "refine_window"]
+__all__ = ["DETECT_AREA_PX", "FLAT_RANGE_GREY", "board_object_points", "detect_board", "is_flat", "refine_window"]
 
 #: Images with more pixels than this are detected on a downscaled copy (as ROS does).
 DETECT_AREA_PX = 640 * 480
@@ -148,3 +148,11 @@ def detect_board(gray: NDArray[np.uint8], pattern: tuple[int, int]) -> tuple[Cor
     win = refine_window(found, pattern)
     refined = cv2.cornerSubPix(gray, found.reshape(-1, 1, 2).copy(), (win, win), (-1, -1), _SUBPIX_CRITERIA)
     return np.asarray(refined, np.float32).reshape(-1, 2), detector
+
+
+def board_object_points(pattern: tuple[int, int], square_m: float) -> NDArray[np.float32]:
+    """Inner corners of a ``(cols, rows)`` chessboard in the board frame (metres, z = 0), shape (N, 3),
+    row-major as :func:`detect_board` returns them: corner k = (k % cols, k // cols) squares."""
+    cols, rows = pattern
+    grid = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2).astype(np.float32)
+    return np.hstack([grid * np.float32(square_m), np.zeros((cols * rows, 1), np.float32)])

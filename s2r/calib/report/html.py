@@ -20,6 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.report.plots import (
     board_poses_3d,
     coverage_maps,
@@ -30,7 +31,6 @@ from s2r.calib.report.plots import (
 from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.projection import ProjectionMap
 from s2r.calib.solve.stereo import StereoCalibration
-from s2r.calib.solve.synth import board_object_points
 from s2r.fileio import OutputBatch
 from s2r.htmlreport import (
     ReportSection,

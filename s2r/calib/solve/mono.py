@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
+from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS
@@ -23,7 +24,6 @@ from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_st
 from s2r.calib.solve.projection import ProjectionMap
 from s2r.calib.solve.stereo import make_camera
 from s2r.calib.solve.stereo_figures import board_text, dropped_warning, repeat_warning
-from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, mono_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, merge_repeats, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import Detection
+from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect.pairs import PairDetection, display_name
 from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
@@ -33,7 +34,6 @@ from s2r.calib.solve.stereo_figures import (
     repeat_warning,
     with_reported_std,
 )
-from s2r.calib.solve.synth import board_object_points
 from s2r.calib.solve.verdict import Verdict, stereo_verdict
 from s2r.calib.solve.views import (
     MIN_VIEWS,

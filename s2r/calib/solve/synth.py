@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.calib.detect.chessboard import board_object_points
 from s2r.profile import Camera, StereoProfile
 
 __all__ = [
@@ -32,14 +33,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 _PX_PER_SQUARE = 48
-
-
-def board_object_points(pattern: tuple[int, int], square_m: float) -> NDArray[np.float32]:
-    """Inner corners of a ``(cols, rows)`` chessboard in the board frame (metres, z = 0), shape (N, 3),
-    row-major as OpenCV returns them: corner k = (k % cols, k // cols) squares."""
-    cols, rows = pattern
-    grid = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2).astype(np.float32)
-    return np.hstack([grid * np.float32(square_m), np.zeros((cols * rows, 1), np.float32)])
 
 
 def board_texture(pattern: tuple[int, int], *, px_per_square: int = _PX_PER_SQUARE) -> NDArray[np.uint8]:
