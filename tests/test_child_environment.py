@@ -45,27 +45,34 @@ def test_children_search_no_relative_folder_restores_the_variable(monkeypatch: p
 _RELATIVE_TRY = "trying file=libpython"  # the loader's line for a relative (current-folder) attempt
 
 
-def _loader_trace(tmp_path: Path, code: str) -> str:
-    """Run ``code`` in a fresh interpreter that has imported cv2, from ``tmp_path``, with the loader's library
-    search of every process traced to files there; all traces joined."""
-    probe = f"import cv2, os\nassert os.environ['LD_LIBRARY_PATH'].endswith(':')\n{code}"
+def _loader_trace(tmp_path: Path, args: list[str], *, processes: int = 2) -> str:
+    """Run ``python args`` from ``tmp_path`` with the loader's library search of every process traced to files
+    there (at least ``processes`` of them); all traces joined."""
     env = {**os.environ, "LD_DEBUG": "libs", "LD_DEBUG_OUTPUT": str(tmp_path / "ld")}
     env.pop("LD_LIBRARY_PATH", None)
-    subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, check=True, capture_output=True, timeout=120)
+    done = subprocess.run([sys.executable, *args], cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=180)
+    assert done.returncode == 0, done.stderr[-2000:]
     traces = sorted(tmp_path.glob("ld.*"))
-    assert len(traces) >= 2, "the child processes left no loader trace"
+    assert len(traces) >= processes, "the child processes left no loader trace"
     return "\n".join(p.read_text(errors="replace") for p in traces)
+
+
+def _after_cv2(code: str) -> list[str]:
+    """``python`` arguments running ``code`` in an interpreter that has imported cv2 (LD_LIBRARY_PATH ends ':')."""
+    return ["-c", f"import cv2, os\nassert os.environ['LD_LIBRARY_PATH'].endswith(':')\n{code}"]
 
 
 def test_a_plain_child_of_a_cv2_process_does_search_the_current_folder(tmp_path: Path) -> None:
     """The hazard itself, so the two checks below stay meaningful."""
-    trace = _loader_trace(tmp_path, "import subprocess, sys\nsubprocess.run([sys.executable, '-c', 'pass'])")
+    code = "import subprocess, sys\nsubprocess.run([sys.executable, '-c', 'pass'])"
+    trace = _loader_trace(tmp_path, _after_cv2(code))
     assert _RELATIVE_TRY in trace
 
 
 def test_the_mujoco_probe_does_not_search_the_current_folder(tmp_path: Path) -> None:
     pytest.importorskip("mujoco", reason="the mujoco extra is not installed")
-    trace = _loader_trace(tmp_path, "from s2r.render._mujoco import _probe\n_probe('no-such-platform')")
+    trace = _loader_trace(tmp_path, _after_cv2("from s2r.render._mujoco import _probe\n_probe('no-such-platform')"))
     assert _RELATIVE_TRY not in trace
 
 
@@ -91,11 +98,4 @@ def test_a_spawned_dask_worker_does_not_search_the_current_folder(tmp_path: Path
     pytest.importorskip("distributed", reason="Dask's distributed is not installed")
     script = tmp_path / "run.py"
     script.write_text(_DASK_RUN)
-    env = {**os.environ, "LD_DEBUG": "libs", "LD_DEBUG_OUTPUT": str(tmp_path / "ld")}
-    env.pop("LD_LIBRARY_PATH", None)
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True,
-                          timeout=180)
-    assert done.returncode == 0, done.stderr[-2000:]
-    traces = sorted(tmp_path.glob("ld.*"))
-    assert len(traces) >= 3, "no worker process left a loader trace"
-    assert _RELATIVE_TRY not in "\n".join(p.read_text(errors="replace") for p in traces)
+    assert _RELATIVE_TRY not in _loader_trace(tmp_path, [str(script)], processes=3)  # and a worker's trace
