@@ -180,10 +180,10 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
     R, dR, t = poses
     n = len(R)
     board = _bent_board(state, c, n)
-    # Per view, the rows taking a board point to: the left camera frame (3), this camera's frame (3) and the
-    # derivatives of the latter by the view's rotation vector (9, row a * 3 + j = d X_a / d r_j). One batched
-    # product over the views' zero-padded points, then read back per corner: 10x faster than gathering
-    # (M, 3, 3) and (M, 3, 3, 3) arrays per corner. The pair's rotation is folded into the rows per view.
+    # Per view, the rows taking a board point to this camera's frame (3), the derivatives of that by the view's
+    # rotation vector (9, row a * 3 + j = d X_a / d r_j) and, for the right camera, to the left camera's frame
+    # (3). One batched product over the views' zero-padded points, then read back per corner: 10x faster than
+    # gathering (M, 3, 3) and (M, 3, 3, 3) arrays per corner. The pair's rotation is folded into the rows.
     dR_a = dR.transpose(0, 2, 1, 3).reshape(n, 3, 9)  # [view, a, (j, k)]
     if cam == 1:
         R_lr, dR_lr = rotations([state.r_lr])
@@ -192,15 +192,15 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
         dR_a = Rp @ dR_a
     else:
         R_cam, t_cam = R, t
-    rows = np.concatenate([R, R_cam, dR_a.reshape(n, 9, 3)], axis=1)  # (n, 15, 3)
-    Y = (board @ rows.transpose(0, 2, 1))[c.seg, c.pos]  # (M, 15)
-    X = Y[:, 3:6] + t_cam[c.seg]
+    rows = np.concatenate([R_cam, dR_a.reshape(n, 9, 3), *([R] if cam == 1 else [])], axis=1)  # (n, 12|15, 3)
+    Y = (board @ rows.transpose(0, 2, 1))[c.seg, c.pos]  # (M, 12|15)
+    X = Y[:, :3] + t_cam[c.seg]
     pts, jac = state.lens.projection.project(X, np.zeros(3), np.zeros(3), state.K[cam], state.D[cam])
     jac = jac.reshape(m, 2, -1)
     dp_dX = np.ascontiguousarray(jac[:, :, 3:6])  # (M, 2, 3): d pixel / d point in this camera's frame
     dp_dt = dp_dX if cam == 0 else (dp_dX.reshape(-1, 3) @ Rp).reshape(m, 2, 3)
     Jv = np.empty((m, 2, 6))
-    Jv[:, :, :3] = dp_dX @ Y[:, 6:15].reshape(m, 3, 3)
+    Jv[:, :, :3] = dp_dX @ Y[:, 3:12].reshape(m, 3, 3)
     Jv[:, :, 3:] = dp_dt
     if not with_global:
         return pts.reshape(m, 2) - c.img, None, Jv
@@ -210,7 +210,7 @@ def camera_terms(state: State, cam: int, c: CornerSet, poses: tuple[FloatArray, 
         dX_dw = R_cam[c.seg, :, 2][:, :, None] * state.warp_basis(c.obj)[:, None, :]  # (M, 3, 2)
         Jg[:, :, ni:ni + nw] = dp_dX @ dX_dw
     if cam == 1:
-        X_left = Y[:, :3] + t[c.seg]
+        X_left = Y[:, 12:15] + t[c.seg]
         dX_drlr = (X_left @ dR_lr[0].transpose(1, 0, 2).reshape(9, 3).T).reshape(m, 3, 3)  # [a, j]
         Jg[:, :, ni + nw:ni + nw + 3] = dp_dX @ dX_drlr
         Jg[:, :, ni + nw + 3:] = dp_dX
