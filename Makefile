@@ -5,13 +5,30 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.s2r-installed
 BYTECODE := $(VENV)/.s2r-bytecode
 
-.PHONY: test demo lint typecheck pytest test-browser test-ros bench profiles calibration-sample clean
+.PHONY: lock test demo lint typecheck pytest test-browser test-ros bench profiles calibration-sample clean
 
-$(STAMP): pyproject.toml
+# Installs the tested versions: requirements.lock pins every package (pyproject.toml keeps ranges for users who
+# `pip install s2r`). `make lock` refreshes it from today's releases; commit it only after `make test` is green.
+LOCK := requirements.lock
+EXTRAS := ros,dev,mujoco
+
+$(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[ros,dev,mujoco]"
+	$(BIN)/python -m pip install --quiet -c $(LOCK) --upgrade pip
+	$(BIN)/python -m pip install --quiet -c $(LOCK) -e ".[$(EXTRAS)]"
 	touch $(STAMP)
+
+lock:
+	rm -rf .lock-venv
+	$(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/python -m pip install --quiet --upgrade pip
+	.lock-venv/bin/python -m pip install --quiet ".[$(EXTRAS)]"
+	{ echo "# The tested versions: make installs with these as constraints (pip install -c $(LOCK))."; \
+	  echo "# Written by \`make lock\` ($$(date -u +%F), $$(.lock-venv/bin/python --version), $$(uname -m)); pyproject.toml keeps ranges."; \
+	  echo "pip==$$(.lock-venv/bin/python -m pip --version | cut -d' ' -f2)"; \
+	  .lock-venv/bin/python -m pip freeze --exclude s2r | grep -v '^#' | LC_ALL=C sort -f; } > $(LOCK).new
+	mv $(LOCK).new $(LOCK)
+	rm -rf .lock-venv
 
 # s2r's modules compiled once (an editable install never compiles them, and with PYTHONDONTWRITEBYTECODE set
 # every run would compile about 150 modules again: ~0.1 s of each `s2r` command). Redone when a source changes.

@@ -16,6 +16,7 @@ LAYERS: dict[str, int] = {
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,
+    "recordings": 5,  # every input that yields stereo frames (files, bags, videos, RealSense recordings)
     "registry": 5, "htmlreport": 5, "sensor": 5,  # sensor: applies a sensor model (render uses it)
     "calib": 6, "depth": 6, "render": 6,
     "compat": 7, "quality": 7, "drift": 7,
@@ -23,7 +24,7 @@ LAYERS: dict[str, int] = {
     "cli": 9, "__main__": 10, "__init__": 10,
 }
 CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
-             "quality", "drift", "sensor", "sensor_fit"}
+             "quality", "drift", "sensor", "sensor_fit", "recordings"}
 PYBULLET_HOMES = {"render"}
 #: MuJoCo (an optional extra) is imported by one module only, lazily, when ``--renderer mujoco`` is asked for.
 MUJOCO_HOMES = {"render._mujoco"}

@@ -1,0 +1,51 @@
+"""The frame contract every recording input yields and every stream consumer (depth, calibrate, check) reads."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["FrameSource", "StereoFrame"]
+
+
+@dataclass(frozen=True)
+class StereoFrame:
+    """One stereo pair as a recording holds it, decoded.
+
+    Attributes:
+        index: position of the frame in the whole recording, 0-based, counted before ``--every`` / ``--max-frames``
+            thin it (so outputs can be traced back to the input).
+        name: a file-name-safe stem naming the frame: the left image's file stem for files, the left stamp in
+            nanoseconds for bags (``1700000000123456789``), ``frame_000123`` for videos.
+        stamp_ns: the left image's time in nanoseconds: the header stamp for bags, frame index / fps for videos,
+            None for still files.
+        frame_id: the left image's ROS frame_id as recorded ('' when the input has none).
+        left: left image, uint8, H x W (grey) or H x W x 3 (BGR).
+        right: right image, the same size and channels as ``left``.
+        source: a short human description of where the pair came from (file names, ``bag TOPIC @ STAMP``,
+            ``video FILE frame N``), for messages and the output index.
+    """
+
+    index: int
+    name: str
+    stamp_ns: int | None
+    frame_id: str
+    left: NDArray[np.uint8]
+    right: NDArray[np.uint8]
+    source: str
+
+
+class FrameSource(Protocol):
+    """Anything that streams stereo frames: iterate it once, in recording order."""
+
+    def frames(self) -> Iterator[StereoFrame]:
+        """The frames, decoded one at a time (never the whole recording in memory)."""
+        ...
+
+    def describe(self) -> str:
+        """One line naming the recording for summaries (``folder rec/ (24 pairs)``, ``bag run.bag``)."""
+        ...
