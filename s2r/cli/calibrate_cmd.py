@@ -32,7 +32,7 @@ def register(sub: Any) -> None:
                    help="chessboard inner corners COLSxROWS, e.g. 9x6 (required unless --target)")
     p.add_argument("--square", type=float, default=None,
                    help="square edge in metres, e.g. 0.025 (required unless --target: every length scales with it)")
-    p.add_argument("-o", "--output", type=Path, required=True, help="profile YAML to write")
+    p.add_argument("-o", "--output", type=Path, default=None, help="profile YAML to write (required)")
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
     p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
@@ -85,17 +85,19 @@ def _lens_and_target(args: argparse.Namespace, pattern: tuple[int, int]) -> tupl
 
 
 def _required_board(args: argparse.Namespace) -> None:
-    """No silent board: a chessboard needs ``--square`` and ``--pattern`` (a ``--target`` file has both)."""
-    if args.target is not None:
-        return
-    if args.square is None:
-        raise CalibrationError("the square size is required: every length (baseline, board distance) scales with "
-                               "it", field="--square", hint="measure one square edge of the printed board, e.g. "
-                                                            "--square 0.025 for 25 mm (or describe it with --target)")
-    if args.pattern is None:
-        raise CalibrationError("the chessboard is required", field="--pattern",
-                               hint="give its inner corners COLSxROWS, e.g. --pattern 9x6 for a board of 10x7 "
-                                    "squares (or describe the board with --target FILE)")
+    """Every missing required option in one message: the output, and for a chessboard ``--pattern`` and
+    ``--square`` (a ``--target`` file has both). No silent board: every length scales with the square."""
+    missing = []
+    if args.target is None and args.pattern is None:
+        missing.append("--pattern COLSxROWS (the chessboard's INNER corners, e.g. 9x6 for a board of 10x7 squares)")
+    if args.target is None and args.square is None:
+        missing.append("--square METRES (one square's edge: every length scales with it, e.g. 0.025 for 25 mm)")
+    if args.output is None:
+        missing.append("-o FILE (the profile YAML to write)")
+    if missing:
+        raise CalibrationError(f"missing required option{'s' if len(missing) > 1 else ''}: " + ", ".join(missing),
+                               hint="or describe the board with --target FILE" if args.target is None and
+                               len(missing) > int(args.output is None) else None)
 
 
 def _check_args(args: argparse.Namespace) -> tuple[int, int]:
@@ -167,6 +169,8 @@ def run(args: argparse.Namespace) -> int:
                     "report": None if args.report is None else str(args.report / "index.html")})
     else:
         _print_summary({**result.figures(), "board": _board_of(args, target, pattern)}, out)
+        if args.report is not None:
+            print(f"report: {args.report / 'index.html'}")
     return EXIT_OK
 
 
@@ -184,6 +188,8 @@ def _pm(value: float, sd: float | None, digits: int = 2) -> str:
     return f"{value:.{digits}f}±{sd:.2g}"
 def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, common: dict[str, Any]) -> Any:
     """The calibration the arguments ask for: a ``--target``, ``--mono``, a bag, or stereo image pairs."""
+    from s2r.calib.detect.board_size import check_board_size
+
     result: Any
     if target is not None:
         result = _run_target(args, target, lens, common)
@@ -194,7 +200,9 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
         if args.bag is not None:
             raise CalibrationError("--mono from a bag is not supported", field="--bag",
                                    hint="export the images to a folder first")
-        result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
+        images = find_mono_images(args.input, image_glob=args.left)
+        check_board_size(images, pattern)
+        result = calibrate_mono(images, **common)
     elif args.bag is not None:
         from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
@@ -207,6 +215,7 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
         from s2r.calib.detect.pairs import PairDetection
 
         pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
+        check_board_size(pairs.left, pattern)  # a wrong --pattern named in a second, before the full search
         detection = PairDetection(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
                                   swap=args.swap, pattern=pattern, jobs=args.jobs, cache_dir=common["cache_dir"],
                                   progress=common["progress"])

@@ -71,7 +71,7 @@ def test_a_recording_of_fifos_or_devices_is_bad_input(capsys: pytest.CaptureFixt
     os.mkfifo(tmp_path / "right" / "00.png")
     (tmp_path / "right" / "01.png").symlink_to("/dev/zero")
     assert main(["check", str(base / "rig.yaml"), str(tmp_path)]) == 2
-    assert "no left/right image pairs" in _err(capsys)
+    assert "1 left image and no right images" in _err(capsys)  # a FIFO or a device is not an image file
 
 
 def test_identical_and_swapped_pairs_are_named_not_judged(capsys: pytest.CaptureFixture[str], base: Path,

@@ -44,6 +44,8 @@ class PairSet:
 
 
 def _images_in(folder: Path, prefix: str = "") -> list[Path]:
+    if not folder.is_dir():  # a camera subfolder that is missing holds no images
+        return []
     return sorted(p for p in folder.iterdir()
                   if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES and p.name.lower().startswith(prefix))
 
@@ -59,6 +61,19 @@ def _camera_subfolders(folder: Path) -> tuple[Path, Path] | None:
     for left_name, right_name in CAMERA_SUBFOLDERS:
         if left_name in children and right_name in children:
             return _data_folder(children[left_name]), _data_folder(children[right_name])
+    return None
+
+
+def _one_camera_subfolder(folder: Path) -> tuple[Path, Path] | None:
+    """``(left, right)`` when ``folder`` holds one camera subfolder of a pair with images and not its partner
+    (the missing one named as ``folder/<name>``, which pairs with nothing), else None."""
+    children = {p.name.lower(): p for p in folder.iterdir() if p.is_dir()}
+    for left_name, right_name in CAMERA_SUBFOLDERS:
+        present = [children[n] for n in (left_name, right_name) if n in children]
+        if len(present) == 1 and _images_in(_data_folder(present[0])):
+            found = _data_folder(present[0])
+            missing = folder / (right_name if left_name in children else left_name)
+            return (found, missing) if left_name in children else (missing, found)
     return None
 
 
@@ -83,16 +98,53 @@ def _key(path: Path, *, prefix: str = "") -> str:
 
 def pair_by_number(left: Sequence[Path], right: Sequence[Path], *, left_prefix: str = "",
                    right_prefix: str = "") -> PairSet:
-    """Pair files whose names carry the same number (or the same stem after the side prefix)."""
-    lk = {_key(p, prefix=left_prefix): p for p in left}
-    rk = {_key(p, prefix=right_prefix): p for p in right}
-    if len(lk) != len(left) or len(rk) != len(right):
-        raise CalibrationError("two images share one pairing number", path=str(Path(left[0]).parent) if left else None,
-                               hint="give each left/right pair a unique number in its file names")
+    """Pair files whose names carry the same number (or the same stem after the side prefix).
+
+    CalibrationError naming the two files when two images of one side share a number, and naming the pairing
+    problem (one side missing, or no number in common) when not one pair forms.
+    """
+    lk = _keyed(left, prefix=left_prefix)
+    rk = _keyed(right, prefix=right_prefix)
     common = sorted(set(lk) & set(rk), key=lambda k: (len(k), k))
+    if not common:
+        raise _no_pairs_error(left, right)
     unpaired = sorted([lk[k] for k in set(lk) - set(rk)] + [rk[k] for k in set(rk) - set(lk)])
     return PairSet(left=tuple(lk[k] for k in common), right=tuple(rk[k] for k in common),
                    names=tuple(lk[k].stem for k in common), unpaired=tuple(unpaired))
+
+
+def _keyed(files: Sequence[Path], *, prefix: str) -> dict[str, Path]:
+    """``{pairing key: file}``; CalibrationError naming both files when two share a key."""
+    keyed: dict[str, Path] = {}
+    for path in files:
+        key = _key(path, prefix=prefix)
+        if key in keyed:
+            raise CalibrationError(f"two images share one pairing number ({key}): {keyed[key].name} and {path.name}",
+                                   path=str(path.parent),
+                                   hint="give each left/right pair a unique number in its file names")
+        keyed[key] = path
+    return keyed
+
+
+def _no_pairs_error(left: Sequence[Path], right: Sequence[Path]) -> CalibrationError:
+    """The pairing problem when no left image has a right partner: one side missing, or no number in common."""
+    if not left or not right:
+        have, side, other = ("left", left, "right") if left else ("right", right, "left")
+        return CalibrationError(
+            f"{len(side)} {have} image{'s' if len(side) != 1 else ''} and no {other} images: stereo calibration pairs each {have} image with "
+            f"a {other} one", path=str(Path(side[0]).parent),
+            hint=f"add the {other} camera's images as {other}/ beside {have}/ or {other}NN.png beside {have}NN.png; "
+                 "for one camera: s2r calibrate --mono")
+    return CalibrationError(
+        f"no left image shares a pairing number with a right image ({len(left)} left: {_span(left)}; "
+        f"{len(right)} right: {_span(right)})", path=str(Path(left[0]).parent),
+        hint="a pair is two files with one number in their names, e.g. left/07.png and right/07.png")
+
+
+def _span(files: Sequence[Path]) -> str:
+    """``first.png .. last.png`` of sorted ``files`` (one name when there is one)."""
+    names = sorted(Path(p).name for p in files)
+    return names[0] if len(names) == 1 else f"{names[0]} .. {names[-1]}"
 
 
 def _expand(pattern: str, side: str) -> list[Path]:
@@ -120,13 +172,13 @@ def find_stereo_pairs(folder: Path | None = None, *, left_glob: str | None = Non
     if not folder.is_dir():
         raise CalibrationError("input folder not found" if not folder.exists() else "input is not a folder",
                                path=folder, hint="pass a folder with left/ and right/ or left*/right* images")
-    subfolders = _camera_subfolders(folder)
+    subfolders = _camera_subfolders(folder) or _one_camera_subfolder(folder)
     if subfolders is not None:
         return pair_by_number(_images_in(subfolders[0]), _images_in(subfolders[1]))
     left, right = _images_in(folder, "left"), _images_in(folder, "right")
     if not left and not right:
         left, right = _images_named(folder, "left"), _images_named(folder, "right")
-        if left and right:
+        if left or right:
             return pair_by_number(left, right)
         raise CalibrationError("no left/ and right/ subfolders and no left*/right* images", path=folder,
                                hint="put the images in left/ and right/, or name them leftNN.png / rightNN.png")

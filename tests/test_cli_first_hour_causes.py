@@ -1,0 +1,116 @@
+"""The first hour, causes named right: each mistake a newcomer makes gets the one-line error that names it
+(pairing, board size, missing options), checked through the CLI with the exact message."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from s2r.cli import main
+
+OPENCV_SET = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "opencv_stereo_chessboard"
+
+
+def _board(path: Path, *, squares: tuple[int, int] = (10, 7), side_px: int = 36) -> None:
+    """A flat chessboard of ``squares`` (cols, rows) drawn with numpy alone, on a white margin: its inner corners
+    are (cols - 1) x (rows - 1)."""
+    cols, rows = squares
+    cells = (np.add.outer(np.arange(rows), np.arange(cols)) % 2 == 0).astype(np.uint8)
+    board = np.kron(cells, np.ones((side_px, side_px), np.uint8)) * 200 + 30
+    image = np.full((480, 640), 255, np.uint8)
+    y0, x0 = (480 - board.shape[0]) // 2, (640 - board.shape[1]) // 2
+    image[y0:y0 + board.shape[0], x0:x0 + board.shape[1]] = board
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(image).save(path)
+
+
+def _error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err.strip()
+
+
+def test_left_only_images_are_a_pairing_problem(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for i in (1, 2, 3):
+        _board(tmp_path / "set" / f"left{i:02d}.png")
+    assert _error(capsys, ["calibrate", str(tmp_path / "set"), "--pattern", "9x6", "--square", "0.025",
+                           "-o", str(tmp_path / "out.yaml")]) == (
+        f"error: {tmp_path / 'set'}: 3 left images and no right images: stereo calibration pairs each left image "
+        "with a right one (add the right camera's images as right/ beside left/ or rightNN.png beside leftNN.png; "
+        "for one camera: s2r calibrate --mono)")
+
+
+def test_a_left_folder_without_its_right_folder_is_a_pairing_problem(tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    for i in (1, 2):
+        _board(tmp_path / "set" / "left" / f"{i:02d}.png")
+    err = _error(capsys, ["calibrate", str(tmp_path / "set"), "--pattern", "9x6", "--square", "0.025",
+                          "-o", str(tmp_path / "out.yaml")])
+    assert err.startswith(f"error: {tmp_path / 'set' / 'left'}: 2 left images and no right images")
+
+
+def test_folders_without_common_numbers_are_a_pairing_problem(tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture[str]) -> None:
+    for i in (1, 2, 3):
+        _board(tmp_path / "set" / "left" / f"{i:02d}.png")
+        _board(tmp_path / "set" / "right" / f"{10 + i}.png")
+    assert _error(capsys, ["calibrate", str(tmp_path / "set"), "--pattern", "9x6", "--square", "0.025",
+                           "-o", str(tmp_path / "out.yaml")]) == (
+        f"error: {tmp_path / 'set' / 'left'}: no left image shares a pairing number with a right image (3 left: "
+        "01.png .. 03.png; 3 right: 11.png .. 13.png) (a pair is two files with one number in their names, e.g. "
+        "left/07.png and right/07.png)")
+
+
+def test_two_images_with_one_pairing_number_are_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for name in ("left01.png", "left1.png", "right01.png"):
+        _board(tmp_path / "set" / name)
+    assert _error(capsys, ["calibrate", str(tmp_path / "set"), "--pattern", "9x6", "--square", "0.025",
+                           "-o", str(tmp_path / "out.yaml")]) == (
+        f"error: {tmp_path / 'set'}: two images share one pairing number (1): left01.png and left1.png (give each "
+        "left/right pair a unique number in its file names)")
+
+
+def test_a_wrong_board_size_is_named_with_the_size_that_is_there(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    for i in range(6):  # a board of 10x7 squares: 9x6 inner corners; 10x7 given (the squares counted)
+        _board(tmp_path / "set" / "left" / f"{i}.png")
+        _board(tmp_path / "set" / "right" / f"{i}.png")
+    argv = ["calibrate", str(tmp_path / "set"), "--square", "0.025", "-o", str(tmp_path / "out.yaml")]
+    assert _error(capsys, [*argv, "--pattern", "10x7"]) == (
+        "error: --pattern: no 10x7 chessboard found; the images hold a 9x6 board (inner corners): use --pattern 9x6")
+    assert _error(capsys, [*argv, "--pattern", "5x4"]) == (
+        "error: --pattern: no 5x4 chessboard found; the images hold a 9x6 board (inner corners): use --pattern 9x6")
+
+
+def test_opencv_sample_set_with_squares_counted_is_told_its_inner_corners(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    if not OPENCV_SET.is_dir():
+        pytest.skip(f"real data absent: {OPENCV_SET}")
+    assert _error(capsys, ["calibrate", str(OPENCV_SET), "--pattern", "10x7", "--square", "0.025", "--no-cache",
+                           "-o", str(tmp_path / "out.yaml")]) == (
+        "error: --pattern: no 10x7 chessboard found; the images hold a 9x6 board (inner corners): use --pattern 9x6")
+
+
+def test_every_missing_required_option_in_one_message(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert _error(capsys, ["calibrate", str(tmp_path)]) == (
+        "error: missing required options: --pattern COLSxROWS (the chessboard's INNER corners, e.g. 9x6 for a board "
+        "of 10x7 squares), --square METRES (one square's edge: every length scales with it, e.g. 0.025 for 25 mm), "
+        "-o FILE (the profile YAML to write) (or describe the board with --target FILE)")
+    assert _error(capsys, ["calibrate", str(tmp_path), "--pattern", "9x6", "--square", "0.025"]) == (
+        "error: missing required option: -o FILE (the profile YAML to write)")
+
+
+def test_calibrate_report_prints_where_the_report_is(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    if not OPENCV_SET.is_dir():
+        pytest.skip(f"real data absent: {OPENCV_SET}")
+    shutil.copytree(OPENCV_SET, tmp_path / "set", ignore=shutil.ignore_patterns("*.yml", "*.xml", "*.txt"))
+    assert main(["calibrate", str(tmp_path / "set"), "--pattern", "9x6", "--square", "0.025", "-q", "--no-cache",
+                 "-o", str(tmp_path / "real.yaml"), "--report", str(tmp_path / "report")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1] == f"report: {tmp_path / 'report' / 'index.html'}"
+    assert (tmp_path / "report" / "index.html").is_file()
