@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import time
+from pathlib import Path
 
 import pytest
 
@@ -77,3 +78,41 @@ def test_quiet_and_debug_work_after_the_subcommand_too(capsys: pytest.CaptureFix
     assert capsys.readouterr().err.startswith("error: ")
     with pytest.raises(Exception, match="no_such_rig"):
         main(["validate", "no_such_rig", "--debug"])
+
+
+def test_the_profile_is_the_first_positional_of_sensor_fit_and_apply(capsys: pytest.CaptureFixture[str],
+                                                                    tmp_path: Path) -> None:
+    # the profile is read first: a missing recording is the next error either way, the alias still works
+    assert main(["sensor", "fit", "realsense_d435_848x480", "--pattern", "9x6", "--square", "0.025",
+                 "-o", str(tmp_path / "s.yaml")]) == 2
+    assert capsys.readouterr().err.strip() == "error: --left: missing left images (pass --left DIR|GLOB (or --bag))"
+    assert main(["sensor", "apply", "no_such_rig", str(tmp_path / "s.yaml"), str(tmp_path), "-o",
+                 str(tmp_path / "out")]) == 2
+    assert "no_such_rig" in capsys.readouterr().err
+    assert main(["sensor", "apply", str(tmp_path / "s.yaml"), str(tmp_path), "--profile", "no_such_rig", "-o",
+                 str(tmp_path / "out")]) == 2
+    assert "no_such_rig" in capsys.readouterr().err
+    assert main(["sensor", "apply", str(tmp_path / "s.yaml"), str(tmp_path), "-o", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.strip() == ("error: PROFILE: missing the profile (give it first: s2r sensor "
+                                               "apply PROFILE ... (a name or a YAML path))")
+
+
+@pytest.mark.parametrize("command", [["validate"], ["depth-quality"], ["sensor", "fit"], ["sensor", "apply"]])
+def test_reversed_arguments_get_a_one_line_hint(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                command: list[str]) -> None:
+    (tmp_path / "run1").mkdir()
+    assert main([*command, str(tmp_path / "run1"), "realsense_d435_848x480", "-o", str(tmp_path / "x")]) == 2
+    assert capsys.readouterr().err == (
+        f"error: {tmp_path / 'run1'} is a folder and realsense_d435_848x480 a profile: arguments reversed? the profile "
+        f"comes first: s2r {' '.join(command)} realsense_d435_848x480 ...\n")
+
+
+def test_a_recording_file_first_is_reversed_too_but_two_recordings_are_not(capsys: pytest.CaptureFixture[str],
+                                                                           tmp_path: Path) -> None:
+    (tmp_path / "run.bag").write_bytes(b"")
+    assert main(["-q", "validate", str(tmp_path / "run.bag"), "realsense_d435_848x480"]) == 2
+    assert "arguments reversed? the profile comes first: s2r validate realsense_d435_848x480 ..." in \
+        capsys.readouterr().err
+    (tmp_path / "d").mkdir()
+    assert main(["sensor", "apply", str(tmp_path / "d"), str(tmp_path / "d"), "-o", str(tmp_path / "o")]) == 2
+    assert "reversed" not in capsys.readouterr().err

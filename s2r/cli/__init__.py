@@ -33,6 +33,7 @@ from s2r.cli import (  # _process first: its process-wide settings (BLAS threads
     sources_cmd,
     validate_cmd,
 )
+from s2r.cli._order import reversed_arguments
 from s2r.errors import S2RError, terminal_safe
 
 __all__ = ["build_parser", "entry", "main"]
@@ -202,6 +203,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging_state = logger.handlers[:], logger.level, logger.propagate
     sys.stdout, sys.stderr = _TerminalSafeStream(sys.stdout), _TerminalSafeStream(sys.stderr)
     try:
+        hint = reversed_arguments(parser, _Parser.argv)
+        if hint is not None:  # before argparse, whose "unrecognized arguments" would hide the cause
+            print(f"error: {hint}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         args = parser.parse_args(argv)
         _configure_logging(args.quiet)
         return _run(args)

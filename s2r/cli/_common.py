@@ -18,8 +18,8 @@ import numpy as np
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
 
-__all__ = ["ProgressBar", "add_force", "add_json", "add_recording_inputs", "argparse_type", "load_profile",
-           "parse_distances", "parse_pattern", "print_json", "to_jsonable"]
+__all__ = ["ProgressBar", "add_force", "add_json", "add_profile_positional", "add_recording_inputs", "argparse_type",
+           "load_profile", "parse_distances", "parse_pattern", "print_json", "profile_argument", "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -50,6 +50,29 @@ def load_profile(name_or_path: Any) -> StereoProfile:
     from s2r.registry import load_profile as load
 
     return load(name_or_path)
+
+
+def add_profile_positional(parser: argparse.ArgumentParser, *, help: str) -> None:
+    """The profile as the first positional (``s2r CMD PROFILE ...``, as check, validate and depth-quality take it),
+    with ``--profile`` kept as an alias; :func:`profile_argument` reads whichever was given."""
+    parser.add_argument("profile", metavar="PROFILE", nargs="?", help=help)
+    parser.add_argument("--profile", dest="profile_option", metavar="PROFILE",
+                        help="the same as the PROFILE positional (an alias kept for older scripts)")
+
+
+def profile_argument(args: argparse.Namespace, *, command: str) -> str:
+    """The profile given by :func:`add_profile_positional`'s positional or ``--profile``; ProfileError when
+    neither or two different ones were given."""
+    from s2r.errors import ProfileError
+
+    positional, option = args.profile, args.profile_option
+    if positional is None and option is None:
+        raise ProfileError("missing the profile", field="PROFILE",
+                           hint=f"give it first: s2r {command} PROFILE ... (a name or a YAML path)")
+    if positional is not None and option is not None and positional != option:
+        raise ProfileError(f"two profiles given: {positional} and --profile {option}", field="PROFILE",
+                           hint=f"give one: s2r {command} PROFILE ...")
+    return str(positional if positional is not None else option)
 
 
 def argparse_type(parse: Callable[[str], T]) -> Callable[[str], T]:

@@ -13,11 +13,13 @@ from s2r.cli._common import (
     ProgressBar,
     add_force,
     add_json,
+    add_profile_positional,
     add_recording_inputs,
     argparse_type,
     load_profile,
     parse_pattern,
     print_json,
+    profile_argument,
 )
 from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
@@ -41,7 +43,7 @@ def register(sub: Any) -> None:
         "noise (grey levels) and blur (px) from the raw images, and from device depth (--depth) the disparity "
         "noise sigma_d (px) against distance, the fill rate against distance and the dropout band at depth edges; "
         "from stereo pairs (--right) the pipeline's sub-pixel RMS and fill rate. Writes sensor.yaml.")
-    fit.add_argument("--profile", required=True, help="the recording camera's profile (name or YAML path)")
+    add_profile_positional(fit, help="the recording camera's profile (name or YAML path)")
     add_recording_inputs(fit)
     fit.add_argument("--preset", default="profile", choices=PRESETS,
                      help="matcher preset for stereo pairs (default profile)")
@@ -60,9 +62,9 @@ def register(sub: Any) -> None:
         description="Adds the model's dropout at depth edges, holes against distance, disparity noise and "
         "sub-pixel quantisation to every depth file of DEPTH (uint16 PNG in --depth-scale units, 0 = no data, or "
         "float .npy metres); writes files of the same names and kinds into OUT. Seeded.")
+    add_profile_positional(apply, help="the depth camera's profile: f (left, px) x baseline")
     apply.add_argument("model", metavar="SENSOR", help="sensor.yaml, or a profile with a sensor: section")
     apply.add_argument("depth", metavar="DEPTH", help="folder or quoted glob of perfect depth files")
-    apply.add_argument("--profile", required=True, help="the depth camera's profile: f (left, px) x baseline")
     apply.add_argument("-o", "--output", dest="out", required=True, metavar="OUT", help="output folder")
     apply.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same output")
     apply.add_argument("--depth-scale", type=float, default=0.001, help="metres per count of 16-bit depth")
@@ -156,7 +158,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from s2r.sensor_fit import fit_model
 
     _check_fit_args(args)
-    profile = load_profile(args.profile)
+    profile = load_profile(profile_argument(args, command="sensor fit"))
     check_output_free(args.out, force=args.force)
     if args.profile_out:
         check_output_free(args.profile_out, force=args.force)
@@ -206,8 +208,8 @@ def _cmd_apply(args: argparse.Namespace) -> int:
         raise DepthError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     if not 0 < args.depth_scale < float("inf"):
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
+    profile = load_profile(profile_argument(args, command="sensor apply"))
     model = load_sensor_model(args.model)
-    profile = load_profile(args.profile)
     sources = list_files(args.depth, DEPTH_SUFFIXES, option="DEPTH")
     written = apply_to_files(model, sources, args.out, fb_px_m=device_fb(profile), seed=args.seed,
                              depth_scale_m=args.depth_scale, force=args.force)

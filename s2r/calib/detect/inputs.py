@@ -131,8 +131,8 @@ def _no_pairs_error(left: Sequence[Path], right: Sequence[Path]) -> CalibrationE
     if not left or not right:
         have, side, other = ("left", left, "right") if left else ("right", right, "left")
         return CalibrationError(
-            f"{len(side)} {have} image{'s' if len(side) != 1 else ''} and no {other} images: stereo calibration pairs each {have} image with "
-            f"a {other} one", path=str(Path(side[0]).parent),
+            f"{len(side)} {have} image{'s' if len(side) != 1 else ''} and no {other} images: stereo calibration "
+            f"pairs each {have} image with a {other} one", path=str(Path(side[0]).parent),
             hint=f"add the {other} camera's images as {other}/ beside {have}/ or {other}NN.png beside {have}NN.png; "
                  "for one camera: s2r calibrate --mono")
     return CalibrationError(
