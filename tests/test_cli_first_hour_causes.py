@@ -114,3 +114,15 @@ def test_calibrate_report_prints_where_the_report_is(tmp_path: Path, capsys: pyt
     out = capsys.readouterr().out.splitlines()
     assert out[-1] == f"report: {tmp_path / 'report' / 'index.html'}"
     assert (tmp_path / "report" / "index.html").is_file()
+
+
+def test_a_misspelt_xacro_argument_names_the_declared_ones(tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    rig = Path(__file__).resolve().parents[1] / "urdf" / "dual_camera_fixed.urdf.xacro"
+    assert _error(capsys, ["profile", "from-urdf", str(rig), "widht:=848", "-o", str(tmp_path / "p.yaml")]) == (
+        f"error: {rig}: unknown xacro argument widht:=848 (did you mean width?); the file declares: baseline_xyz, "
+        "clip_far, clip_near, height, hfov, update_rate, width (spell it as declared: xacro ignores an argument it "
+        "does not know, silently)")
+    assert not (tmp_path / "p.yaml").exists()
+    assert main(["profile", "from-urdf", str(rig), "width:=848", "-q", "-o", str(tmp_path / "p.yaml")]) == 0
+    assert "848x480" in capsys.readouterr().out

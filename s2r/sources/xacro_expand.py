@@ -191,7 +191,30 @@ def _expand_here(path: Path, mappings: dict[str, str], package_paths: Sequence[P
                               hint="README 'Hostile input' lists what a xacro may do") from None
         raise SourceError(f"xacro expansion failed: {_safe_detail(exc, cause)}", path=path, field="xacro",
                           hint="fix the xacro file or pass the missing name:=value arguments") from None
-    return XacroExpansion(str(doc.toprettyxml(indent="  ")), tuple(_texts(included)))
+    texts = _texts(included)
+    _check_arguments(path, mappings, [t for _, t in _texts([str(Path(path).resolve())]) + texts])
+    return XacroExpansion(str(doc.toprettyxml(indent="  ")), tuple(texts))
+
+
+_DECLARED = re.compile(r"<xacro:arg\s+name\s*=\s*[\"']([^\"']+)[\"']")
+_USED = re.compile(r"\$\(\s*arg\s+([^\s)]+)\s*\)")
+
+
+def _check_arguments(path: Path, mappings: Mapping[str, str], texts: Sequence[str]) -> None:
+    """SourceError for a ``name:=value`` argument no file declares (``<xacro:arg>``) or reads (``$(arg name)``):
+    xacro ignores it silently, so a misspelt ``widht:=848`` would give a profile of the default width."""
+    known = {name for text in texts for pattern in (_DECLARED, _USED) for name in pattern.findall(text)}
+    unknown = sorted(name for name in mappings if name not in known and not name.startswith("_"))
+    if not unknown:
+        return
+    import difflib
+
+    name = unknown[0]
+    close = difflib.get_close_matches(name, sorted(known), n=1, cutoff=0.6)
+    declared = ", ".join(sorted(known)) or "none"
+    raise SourceError(f"unknown xacro argument {name}:={mappings[name]}"
+                      + (f" (did you mean {close[0]}?)" if close else "") + f"; the file declares: {declared}",
+                      path=path, hint="spell it as declared: xacro ignores an argument it does not know, silently")
 
 
 def _texts(paths: Sequence[str]) -> list[tuple[str, str]]:
