@@ -126,3 +126,40 @@ def test_a_misspelt_xacro_argument_names_the_declared_ones(tmp_path: Path,
     assert not (tmp_path / "p.yaml").exists()
     assert main(["profile", "from-urdf", str(rig), "width:=848", "-q", "-o", str(tmp_path / "p.yaml")]) == 0
     assert "848x480" in capsys.readouterr().out
+
+
+def _opencv_stereo(path: Path, size_lines: str) -> Path:
+    """OpenCV's sample intrinsics.yml with R, T and the size lines given, written by hand."""
+    intrinsics = (OPENCV_SET / "intrinsics.yml").read_text()
+    path.write_text(intrinsics + "R: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1., 0., 0., 0., 1., "
+                    "0., 0., 0., 1. ]\nT: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [ -0.0836, 0., "
+                    "0. ]\n" + size_lines)
+    return path
+
+
+@pytest.mark.parametrize("size_lines", ["size: [ 640, 480 ]\n", "image_width: 640\nimage_height: 480\n"])
+def test_an_opencv_stereo_file_that_states_its_size_needs_no_image_size(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], size_lines: str) -> None:
+    if not OPENCV_SET.is_dir():
+        pytest.skip(f"real data absent: {OPENCV_SET}")
+    source = _opencv_stereo(tmp_path / "stereo.yml", size_lines)
+    assert main(["profile", "convert", str(source), "--to", "s2r", "-o", str(tmp_path / "p.yaml")]) == 0
+    assert "profile stereo (640x480, baseline 83.60 mm)" in capsys.readouterr().err
+    bare = _opencv_stereo(tmp_path / "bare.yml", "")
+    assert _error(capsys, ["profile", "convert", str(bare), "--to", "s2r", "-o", str(tmp_path / "q.yaml")]) == (
+        f"error: {bare}: image_width/image_height: not in the file: the image size (pass --image-size WIDTHxHEIGHT "
+        "(or state it in the file: size: [W, H], or image_width and image_height))")
+
+
+@pytest.mark.parametrize("text", ["[left]\nfx = 500\nfy = 500\n[right]\nfx = 500\n[stereo]\nbaseline = 0.1\n",
+                                  "# mine\n[left]\nfx = 500\n[STEREO]\nbaseline = 0.1\n[LEFT_CAM_x]\nfx 500\n"])
+def test_a_home_made_ini_calibration_is_refused_as_what_it_is(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                              text: str) -> None:
+    (tmp_path / "calib.ini").write_text(text)
+    err = _error(capsys, ["profile", "convert", str(tmp_path / "calib.ini"), "--to", "s2r", "-o",
+                          str(tmp_path / "p.yaml")])
+    assert err.startswith(f"error: {tmp_path / 'calib.ini'}: an INI file (sections [left], ")
+    assert err.endswith("that is not a ZED SN*.conf ([LEFT_CAM_HD], [RIGHT_CAM_HD], [STEREO] ...): s2r reads no "
+                        "home-made INI calibration (write the numbers as an s2r profile YAML or an OpenCV FileStorage "
+                        "(M1 D1 M2 D2 R T, size: [W, H]))")
+    assert "malformed ZED" not in err

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Literal
@@ -49,6 +50,27 @@ def _is_opencv(text: str) -> bool:
     return head.startswith("%YAML") or "opencv-matrix" in text or "<opencv_storage>" in head
 
 
+_INI_SECTION = re.compile(r"^\s*\[([^\]\n]+)\]\s*$", re.MULTILINE)
+_INI_ASSIGNMENT = re.compile(r"^\s*[A-Za-z_][\w.\- ]*=", re.MULTILINE)
+
+
+def _is_ini(text: str) -> bool:
+    """An INI file: its first line that is not blank or a comment is a ``[section]``, and it has ``key = value``
+    lines (YAML writes ``key: value``)."""
+    first = next((line for line in text.splitlines() if line.strip() and not line.lstrip().startswith(("#", ";"))),
+                 "")
+    return bool(_INI_SECTION.fullmatch(first)) and bool(_INI_ASSIGNMENT.search(text))
+
+
+def _home_made_ini(text: str, path: Path) -> FormatError:
+    """The refusal of an INI file that is not a ZED SN*.conf, named as what it is (with its sections)."""
+    sections = ", ".join(f"[{s.strip()}]" for s in _INI_SECTION.findall(text)[:5])
+    return FormatError(f"an INI file (sections {sections}) that is not a ZED SN*.conf ([LEFT_CAM_HD], "
+                       "[RIGHT_CAM_HD], [STEREO] ...): s2r reads no home-made INI calibration", path=path,
+                       hint="write the numbers as an s2r profile YAML or an OpenCV FileStorage (M1 D1 M2 D2 R T, "
+                       "size: [W, H])")
+
+
 def _is_s2r(data: dict[Any, Any]) -> bool:
     return "schema_version" in data or ("left" in data and "right" in data and "extrinsics" in data)
 
@@ -70,6 +92,8 @@ def detect_format(path: str | Path) -> Format:
     text = read_text(source)
     if is_zed_conf(text):
         return "zed"
+    if _is_ini(text):
+        raise _home_made_ini(text, source)
     if _is_opencv(text):
         if _is_kalibr_text(text, source):
             return "kalibr"

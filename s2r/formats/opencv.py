@@ -6,7 +6,7 @@ Nodes: ``M1 D1 M2 D2`` (camera matrices and distortion), ``R T`` (OpenCV extrins
 ``X_right = R X_left + T``), optionally ``R1 R2 P1 P2 Q`` (rectification; ignored on import, recomputed
 on export). The sample writes ``intrinsics.yml`` (M1 D1 M2 D2) and ``extrinsics.yml`` (R T R1 R2 P1 P2 Q)
 and no image size: pass both files, and the image size when neither file holds ``image_width`` /
-``image_height``.
+``image_height`` (or ``size: [W, H]`` / ``imageSize``).
 
 Units: ``T`` is in whatever unit the board's square size was given in. The sample calibrates with a
 square size of 1 unless told otherwise, so its T is in SQUARES: pass ``t_scale_m`` (CLI ``--units-m``)
@@ -141,7 +141,7 @@ def _image_size(nodes: dict[str, NodeValue | None], path: Path) -> tuple[int, in
     for wkey, hkey in (("image_width", "image_height"), ("width", "height")):
         if wkey in nodes and hkey in nodes:
             return as_int(nodes[wkey], path, wkey), as_int(nodes[hkey], path, hkey)
-    for key in ("imageSize", "image_size"):
+    for key in ("imageSize", "image_size", "size"):  # [width, height], as OpenCV's stereo_calib and users write it
         value = nodes.get(key)
         if isinstance(value, np.ndarray):
             size = as_matrix(value.tolist(), (2,), path, key)
@@ -298,7 +298,8 @@ def _require_all(first: Path, *, size: bool, extrinsics: bool, R_missing: bool) 
     missing, fixes, fields = [], [], []
     if not size:
         missing.append("the image size")
-        fixes.append("pass --image-size WIDTHxHEIGHT")
+        fixes.append("pass --image-size WIDTHxHEIGHT (or state it in the file: size: [W, H], or image_width and "
+                     "image_height)")
         fields.append("image_width/image_height")
     if not extrinsics:
         missing.append("the extrinsics R and T (it holds intrinsics only: M1 D1 M2 D2)")

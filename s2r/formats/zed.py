@@ -27,8 +27,9 @@ ZED_RESOLUTIONS: dict[str, tuple[int, int]] = {"2K": (2208, 1242), "FHD": (1920,
 
 
 def is_zed_conf(text: str) -> bool:
-    """True for a ZED ``SN*.conf`` (an INI file with ``[LEFT_CAM_..]`` and ``[STEREO]`` sections)."""
-    return "[STEREO]" in text and "[LEFT_CAM_" in text
+    """True for a ZED ``SN*.conf`` (an INI file with ``[LEFT_CAM_<RES>]`` sections, RES one of
+    :data:`ZED_RESOLUTIONS`, and ``[STEREO]``); another INI file is not one, however it names its sections."""
+    return "[STEREO]" in text and any(f"[LEFT_CAM_{res}]" in text for res in ZED_RESOLUTIONS)
 
 
 def _parse(path: Path) -> configparser.ConfigParser:
