@@ -144,7 +144,7 @@ def test_an_opencv_stereo_file_that_states_its_size_needs_no_image_size(
         pytest.skip(f"real data absent: {OPENCV_SET}")
     source = _opencv_stereo(tmp_path / "stereo.yml", size_lines)
     assert main(["profile", "convert", str(source), "--to", "s2r", "-o", str(tmp_path / "p.yaml")]) == 0
-    assert "profile stereo (640x480, baseline 83.60 mm)" in capsys.readouterr().err
+    assert "profile stereo (640x480, baseline 83.60 mm)" in capsys.readouterr().out
     bare = _opencv_stereo(tmp_path / "bare.yml", "")
     assert _error(capsys, ["profile", "convert", str(bare), "--to", "s2r", "-o", str(tmp_path / "q.yaml")]) == (
         f"error: {bare}: image_width/image_height: not in the file: the image size (pass --image-size WIDTHxHEIGHT "
