@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from s2r.cli import main
+from s2r.registry import load_profile
 
 OPENCV_SET = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "opencv_stereo_chessboard"
 
@@ -163,3 +164,16 @@ def test_a_home_made_ini_calibration_is_refused_as_what_it_is(tmp_path: Path, ca
                         "home-made INI calibration (write the numbers as an s2r profile YAML or an OpenCV FileStorage "
                         "(M1 D1 M2 D2 R T, size: [W, H]))")
     assert "malformed ZED" not in err
+
+
+def test_the_d435_profile_states_the_range_it_gives(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["profile", "show", "realsense_d435_848x480"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "  matcher sgbm, 80 disparities: depth 0.30-5.0 m (matcher.min_depth_m..max_depth_m 0.3-5 m; the " \
+           "disparities alone reach 0.27-21.2 m)" in lines
+    # REFERENCE.md: RMS(Z) = Z^2 s / (f B), s = 0.08 px; f 424 px, B 50 mm: 2 % at Z = 0.02 f B / s = 5.3 m, so the
+    # 5 m cut keeps the depth the datasheet's accuracy covers; at 21.2 m (1 px of disparity) the model gives 8 %
+    assert "  stays under 2 % depth error up to 5.30 m" in lines
+    d435 = load_profile("realsense_d435_848x480")
+    assert d435.matcher.max_depth_m <= d435.max_depth_within_m(0.02) == pytest.approx(0.02 * 424 * 0.05 / 0.08)
+    assert float(d435.depth_rms_m(21.2)) / 21.2 == pytest.approx(21.2 * 0.08 / (424 * 0.05))

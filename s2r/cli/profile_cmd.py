@@ -99,7 +99,8 @@ def profile_summary(profile: StereoProfile) -> dict[str, Any]:
         "rotation_deg": math.degrees(profile.rotation_angle_rad),
         "matcher": profile.matcher.algorithm,
         "num_disparities": profile.matcher.num_disparities or profile.num_disparities_for(),
-        "depth_range_m": [near, far],
+        "depth_range_m": [near, far],  # what the disparity range reaches
+        "working_range_m": [max(near, profile.matcher.min_depth_m), min(far, profile.matcher.max_depth_m)],
         "depth_rms_mm": {f"{z:g}m": 1000 * float(profile.depth_rms_m(z)) for z in (0.5, 1.0, 2.0, 3.0, 5.0)},
         "depth_2pct_limit_m": profile.max_depth_within_m(0.02),
     }
@@ -175,14 +176,25 @@ def _cmd_show(args: argparse.Namespace) -> int:
     if abs(y) > abs(x):  # the figures below assume a side-by-side pair
         print(f"  warning: vertical rig (right camera {abs(y) * 100:.1f} cm {'below' if y > 0 else 'above'}): "
               "s2r depth and validate need a side-by-side pair")
-    near, far = summary["depth_range_m"]
-    print(f"  matcher {summary['matcher']}, {summary['num_disparities']} disparities: sees {near:.2f}-{far:.1f} m")
+    print(_range_line(profile, summary))
     rms = "  ".join(f"{k} {v:.1f}" for k, v in summary["depth_rms_mm"].items())
     print(f"  theoretical depth RMS (mm, s=0.08 px): {rms}")
     print(f"  stays under 2 % depth error up to {summary['depth_2pct_limit_m']:.2f} m")
     if profile.sensor is not None:
         print(f"  sensor model: {profile.sensor.describe()}")
     return 0
+
+
+def _range_line(profile: StereoProfile, summary: dict[str, Any]) -> str:
+    """The depth the pipeline gives: the disparity range cut to matcher.min_depth_m..max_depth_m (s2r depth
+    drops the rest), with what the disparities alone reach when the cut is narrower."""
+    near, far = summary["depth_range_m"]
+    lo, hi = summary["working_range_m"]
+    line = f"  matcher {summary['matcher']}, {summary['num_disparities']} disparities: depth {lo:.2f}-{hi:.1f} m"
+    if (lo, hi) == (near, far):
+        return line
+    return (line + f" (matcher.min_depth_m..max_depth_m {profile.matcher.min_depth_m:g}-"
+            f"{profile.matcher.max_depth_m:g} m; the disparities alone reach {near:.2f}-{far:.1f} m)")
 
 
 def _write(profile: StereoProfile, args: argparse.Namespace) -> list[Path]:
