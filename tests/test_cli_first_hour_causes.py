@@ -177,3 +177,95 @@ def test_the_d435_profile_states_the_range_it_gives(capsys: pytest.CaptureFixtur
     d435 = load_profile("realsense_d435_848x480")
     assert d435.matcher.max_depth_m <= d435.max_depth_within_m(0.02) == pytest.approx(0.02 * 424 * 0.05 / 0.08)
     assert float(d435.depth_rms_m(21.2)) / 21.2 == pytest.approx(21.2 * 0.08 / (424 * 0.05))
+
+
+_MJCF_RIG = """<mujoco model="rig">
+  <worldbody>
+    <body name="head" pos="0 0 1">
+      <camera name="rgb" pos="0 0.03 0" xyaxes="0 -1 0 0 0 1" fovy="58" resolution="640 480"/>
+      <camera name="ir_left" pos="0 0 0" xyaxes="0 -1 0 0 0 1" fovy="58" resolution="640 480"/>
+      <camera name="ir_right" pos="0 -0.06 0" xyaxes="0 -1 0 0 0 1" fovy="58" resolution="640 480"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _real_file(tmp_path: Path) -> Path:
+    """The nominal D435 as a user's own file under another name (which no registry knows)."""
+    text = (Path(__file__).resolve().parents[1] / "profiles" / "real" / "realsense_d435_848x480.yaml").read_text()
+    path = tmp_path / "my real.yaml"
+    path.write_text(text.replace("name: realsense_d435_848x480", "name: my_d435"))
+    return path
+
+
+def test_a_mujoco_sim_gets_mjcf_edits_not_gazebo_ones(tmp_path: Path) -> None:
+    from s2r.sources.profile_builder import load_description_profile
+    from s2r.validate.advice_mujoco import suggest_mujoco_edits
+    from s2r.validate.params import parameter_table
+    from s2r.validate.tolerances import Tolerances
+
+    (tmp_path / "rig.xml").write_text(_MJCF_RIG)
+    sim = load_description_profile(tmp_path / "rig.xml", left="ir_left", right="ir_right").in_opencv_pixels()
+    real = load_profile(_real_file(tmp_path)).in_opencv_pixels()
+    edits = {e.parameter: e for e in suggest_mujoco_edits(sim, real, parameter_table(sim, real, Tolerances()))}
+    assert list(edits) == ["resolution", "intrinsics", "right camera pos", "MJCF cameras"]
+    assert edits["resolution"].where.startswith('resolution="848 480" on both <camera> elements of the MJCF')
+    # D435: fx 424, cx 422.5, cy 235 at 848x480: principalpixel = ((848 - 1) / 2 - 422.5, (480 - 1) / 2 - 235)
+    assert edits["intrinsics"].target == 'focalpixel="424 424" principalpixel="1 4.5" (both)'
+    assert 'left <camera>: sensorsize="0.002544 0.00144" focalpixel="424 424" principalpixel="1 4.5"' in \
+        edits["intrinsics"].where
+    assert edits["right camera pos"].where.startswith("move the right <camera> pos by (-0.01 0 0) m along the left "
+                                                      "camera's own axes")
+    assert edits["MJCF cameras"].where.startswith("s2r profile export-mujoco my_d435 -o my_d435_cameras.xml")
+    assert not any("horizontal_fov" in e.where or "hackBaseline" in e.where for e in edits.values())
+
+
+def test_validate_chooses_mjcf_cameras_and_says_mjcf_things(tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "rig.xml").write_text(_MJCF_RIG)
+    assert _error(capsys, ["validate", str(tmp_path / "rig.xml"), "realsense_d435_848x480", "--quick"]) == (
+        f"error: {tmp_path / 'rig.xml'}: <camera>: cannot choose the stereo pair by itself; found 3 camera(s): rgb, "
+        "ir_left, ir_right (pass --left NAME --right NAME with two of the listed cameras)")
+    assert _error(capsys, ["validate", str(tmp_path / "rig.xml"), "realsense_d435_848x480", "--left", "ir_left"]) == (
+        "error: --left/--right: --left and --right name the pair together (pass both, e.g. --left left_cam --right "
+        "right_cam)")
+    assert _error(capsys, ["validate", "gazebo_dual_camera", "realsense_d435_848x480", "--left", "a", "--right",
+                           "b"]).startswith("error: --left/--right: --left/--right choose the cameras of a robot "
+                                            "description, and SIM is a profile")
+    (tmp_path / "none.xml").write_text('<mujoco model="none"><worldbody><body name="b"><geom type="box" '
+                                       'size=".1 .1 .1"/></body></worldbody></mujoco>\n')
+    assert _error(capsys, ["validate", str(tmp_path / "none.xml"), "realsense_d435_848x480"]) == (
+        f"error: {tmp_path / 'none.xml'}: <camera>: no <camera> found in the MJCF (add two <camera name='...' "
+        "pos='...' fovy='...' resolution='W H'/> inside the <body> of the camera link (or write the pair with s2r "
+        "profile export-mujoco PROFILE and <include> it))")
+
+
+@pytest.mark.slow
+def test_validate_of_a_mujoco_sim_ends_with_the_export_of_the_users_real_file(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "rig.xml").write_text(_MJCF_RIG)
+    real = _real_file(tmp_path)
+    assert main(["validate", str(tmp_path / "rig.xml"), str(real), "--left", "ir_left", "--right", "ir_right",
+                 "--quick", "-q"]) == 1
+    out = capsys.readouterr().out
+    assert "fix: intrinsics: focalpixel=" not in out and "export-gazebo" not in out and "horizontal_fov" not in out
+    assert (f"  where to write each edit: --report, --json; every edit at once: s2r profile export-mujoco '{real}' "
+            "-o my_d435_cameras.xml") in out
+
+
+def test_a_pair_with_two_problems_names_both(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    camera = ("<sensor name='{0}' type='camera'><camera><horizontal_fov>1.0</horizontal_fov><image><width>{1}</width>"
+              "<height>{2}</height></image></camera></sensor>")
+    (tmp_path / "rig.sdf").write_text(
+        "<?xml version='1.0'?>\n<sdf version='1.9'><model name='rig'><link name='base'/>\n"
+        f"<link name='left_cam'><pose>0 0 0 0 0 0</pose>{camera.format('left', 640, 480)}</link>\n"
+        f"<link name='right_cam'><pose>0 0.06 0 0 0 0</pose>{camera.format('right', 1280, 720)}</link>\n"
+        "</model></sdf>\n")
+    assert _error(capsys, ["profile", "from-description", str(tmp_path / "rig.sdf"), "-o",
+                           str(tmp_path / "p.yaml")]) == (
+        f"error: {tmp_path / 'rig.sdf'}: line 4: [baseline-side] the 'right' camera is 6.0 cm to the LEFT of the left "
+        "camera (disparities would be negative); and the cameras differ in image size: 640x480 vs 1280x720 "
+        "(rectification needs one size) (swap --left and --right (or the camera names), or set joint '<link "
+        "rig::right_cam pose>' <origin xyz=\"0 -0.06 0\" rpy=\"0 0 0\"/>; give both cameras one image size; or pass "
+        "--allow-bad-baseline to write it anyway (s2r lint says the same))")

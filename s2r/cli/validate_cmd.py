@@ -60,6 +60,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
                         help="--recording board's inner corners COLSxROWS (default 9x6)")
     parser.add_argument("--square", type=float, default=0.025, help="--recording board's square size, m (0.025)")
+    parser.add_argument("--left", metavar="CAM", help="SIM a robot description (URDF / xacro / SDF / MJCF): its left "
+                        "camera (sensor, camera or link name), as s2r profile from-description --left takes it")
+    parser.add_argument("--right", metavar="CAM", help="SIM a robot description: its right camera")
     parser.add_argument("--roles-as-given", action="store_true",
                         help="compare even when SIM is not a simulated profile or REAL is one (provenance.origin); "
                         "e.g. two sim variants")
@@ -85,7 +88,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     if args.seed < 0:  # numpy's generators take non-negative seeds only (was an internal error)
         raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)
-    sim = _load_sim(args.sim)
+    sim = _load_sim(args.sim, left=args.left, right=args.right)
     if args.sensor_model is not None:
         from s2r.sensor.files import load_sensor_model
 
@@ -128,9 +131,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     result = validate(sim, real, tolerances=tolerances, settings=settings, jobs=args.jobs,
                       progress=bar, recording=recording)
     if args.real is not None:  # the "write them" command names the real profile as the user did (a path works)
-        result.edits = [dataclasses.replace(e, where=e.where.replace(f"export-gazebo {e.target} ",
-                                                                     f"export-gazebo {shlex.quote(args.real)} ", 1))
-                        if e.parameter == "sensor XML" else e for e in result.edits]
+        result.edits = [_named_as_given(e, args.real) for e in result.edits]
     if args.json:
         print_json(result.as_dict())
     else:
@@ -141,16 +142,34 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     return 0 if result.passed else 1
 
 
-def _load_sim(name_or_path: str) -> Any:
+def _named_as_given(edit: Any, real_path: str) -> Any:
+    """An export edit (``export-gazebo`` / ``export-mujoco``) naming the real profile as the user did, so the
+    command runs when REAL is a file of theirs (its internal name is no profile the registry knows)."""
+    if edit.parameter not in ("sensor XML", "MJCF cameras"):
+        return edit
+    where = edit.where
+    for export in ("export-gazebo", "export-mujoco"):
+        where = where.replace(f"{export} {edit.target} ", f"{export} {shlex.quote(real_path)} ", 1)
+    return dataclasses.replace(edit, where=where)
+
+
+def _load_sim(name_or_path: str, *, left: str | None = None, right: str | None = None) -> Any:
     """The SIM profile: a profile name or file, or a robot description (URDF / xacro / SDF / MJCF) read as
-    ``s2r profile from-description FILE`` would with its defaults, so ``validate cameras.xml real.yaml`` works."""
+    ``s2r profile from-description FILE [--left CAM --right CAM]`` would, so ``validate cameras.xml real.yaml``
+    works."""
     from s2r.formats.detect import is_robot_description
 
     if not is_robot_description(name_or_path):
+        if left is not None or right is not None:
+            raise ValidateError("--left/--right choose the cameras of a robot description, and SIM is a profile",
+                                field="--left/--right", hint="drop them, or pass the description file as SIM")
         return load_profile(name_or_path)
+    if (left is None) != (right is None):
+        raise ValidateError("--left and --right name the pair together", field="--left/--right",
+                            hint="pass both, e.g. --left left_cam --right right_cam")
     from s2r.sources.profile_builder import load_description_profile
 
-    profile = load_description_profile(name_or_path)
+    profile = load_description_profile(name_or_path, left=left, right=right)
     logger.warning("%s: a robot description: SIM is the profile s2r profile from-description derives from it "
                    "(%s convention)", name_or_path, profile.provenance.convention)
     return profile

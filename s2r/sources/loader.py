@@ -27,6 +27,8 @@ __all__ = ["StereoPair", "check_skipped_includes", "load_description", "log_note
 
 logger = logging.getLogger(__name__)
 _NO_CAMERA_HINT = ("add a <sensor type='camera'> inside <gazebo reference='LINK'> (URDF) or inside a <link> (SDF)")
+_NO_MJCF_CAMERA_HINT = ("add two <camera name='...' pos='...' fovy='...' resolution='W H'/> inside the <body> of "
+                        "the camera link (or write the pair with s2r profile export-mujoco PROFILE and <include> it)")
 
 
 @dataclass(frozen=True)
@@ -160,6 +162,9 @@ def select_pair(description: Description, *, left: str | None = None,
                               hint=f"this description reads environment variables ({listed}) that s2r does not take "
                               "from the machine: pass the ones that switch the cameras on with --env NAME=VALUE "
                               f"(e.g. --env {switches[0]}=1)")
+        if description.kind == "mjcf":
+            raise SourceError("no <camera> found in the MJCF", path=description.path, field="<camera>",
+                              hint=_NO_MJCF_CAMERA_HINT)
         raise SourceError("no camera sensor found", path=description.path, field="<sensor>", hint=_NO_CAMERA_HINT)
     if left is not None and right is not None:
         pair = (_pick(description, left, "--left"), _pick(description, right, "--right"))
@@ -170,9 +175,12 @@ def select_pair(description: Description, *, left: str | None = None,
     if len(cameras) != 2 or left is not None or right is not None:
         names = ", ".join(c.name for c in cameras)
         why = f"found {len(cameras)} camera(s): {names}"
+        mjcf = description.kind == "mjcf"
+        no_camera = _NO_MJCF_CAMERA_HINT if mjcf else _NO_CAMERA_HINT
         raise SourceError(f"cannot choose the stereo pair by itself; {why}", path=description.path,
-                          field="<sensor>", hint="pass --left NAME --right NAME with two of the listed cameras"
-                          if len(cameras) > 1 else "a stereo pair needs two cameras: " + _NO_CAMERA_HINT)
+                          field="<camera>" if mjcf else "<sensor>",
+                          hint="pass --left NAME --right NAME with two of the listed cameras" if len(cameras) > 1
+                          else "a stereo pair needs two cameras: " + no_camera)
     first, second = cameras
     if _side(first) == "right" and _side(second) == "left":
         return second, first

@@ -246,9 +246,21 @@ def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) 
             line = next((n for needle in needles for n, text in enumerate(lines, start=1) if needle in text), None)
         where = f"line {line}" if line else "<joint>/<pose>"
         if severity == "error" and not allow:
-            raise SourceError(f"[{code}] {message.split('; corrected:')[0]}", path=description.path, field=where,
-                              hint=f"{fix}; or pass --allow-bad-baseline to write it anyway (s2r lint says the same)")
+            sizes = _size_mismatch(pair)  # a second problem of the pair is named with the first, not a run later
+            raise SourceError(f"[{code}] {message.split('; corrected:')[0]}" + (f"; and {sizes}" if sizes else ""),
+                              path=description.path, field=where,
+                              hint=f"{fix}" + ("; give both cameras one image size" if sizes else "")
+                              + "; or pass --allow-bad-baseline to write it anyway (s2r lint says the same)")
         logger.warning("%s: %s: %s [%s] %s", description.path, where, severity.upper(), code, message)
+
+
+def _size_mismatch(pair: StereoPair) -> str:
+    """``"the cameras differ in image size: WxH vs WxH (...)"`` when they do, else ``""``."""
+    left, right = pair.left, pair.right
+    if (left.width, left.height) == (right.width, right.height):
+        return ""
+    return (f"the cameras differ in image size: {left.width}x{left.height} vs {right.width}x{right.height} "
+            "(rectification needs one size)")
 
 
 def profile_from_pair(description: Description, pair: StereoPair, *, convention: str = "gazebo-classic",

@@ -56,14 +56,15 @@ _OWN_PARAMS: dict[str, tuple[str, ...]] = {
     "rotation": ("inter-camera rotation",),
 }
 #: The edit (``Edit.parameter`` from :func:`s2r.validate.advice.suggest_edits`) that removes each cause.
+#: A MuJoCo sim's edits (:func:`s2r.validate.advice_mujoco.suggest_mujoco_edits`) are listed beside Gazebo's.
 _EDIT_FOR: dict[str, tuple[str, ...]] = {
     "resolution": ("resolution",),
-    "focal": ("horizontal_fov", "fy"),
-    "principal_point": ("principal point",),
+    "focal": ("horizontal_fov", "fy", "fovy", "intrinsics"),
+    "principal_point": ("principal point", "intrinsics"),
     "lens": ("distortion",),
-    "baseline": ("right camera joint origin",),
-    "rotation": ("right camera joint origin",),
-    "projection": ("sensor XML",),
+    "baseline": ("right camera joint origin", "right camera pos"),
+    "rotation": ("right camera joint origin", "right camera pos"),
+    "projection": ("sensor XML", "MJCF cameras"),
 }
 
 
@@ -194,7 +195,7 @@ def _attribute(check: Check, causes: dict[str, list[str]], fb_key: str) -> str:
     return "depth"
 
 
-def _fix_text(key: str, edits: Sequence[Edit], preset: str) -> str:
+def _fix_text(key: str, edits: Sequence[Edit], preset: str, *, mujoco: bool = False) -> str:
     if edits:
         return "; ".join(f"{e.parameter}: {e.current} -> {e.target} [{e.where}]" for e in edits)
     if key == "bench":
@@ -203,6 +204,8 @@ def _fix_text(key: str, edits: Sequence[Edit], preset: str) -> str:
     if key == "depth":
         return (f"the matcher, not the camera: try another --preset than {preset!r} or tune the profile's "
                 "matcher settings (num_disparities, block size) and validate again")
+    if mujoco:
+        return "s2r profile export-mujoco REAL writes the real camera's MJCF camera pair"
     return "s2r profile export-gazebo REAL writes the real camera's sensor XML"
 
 
@@ -215,7 +218,7 @@ def group_failures(checks: Sequence[Check], rows: Sequence[ParamRow], edits: Seq
     profiles compared (OpenCV pixels), used to weigh focal length against baseline for ``fx * B`` effects.
     """
     failed = _failed_rows(rows)
-    pp_edit = any(e.parameter == "principal point" for e in edits)
+    pp_edit = any(e.parameter in ("principal point", "intrinsics") for e in edits)
     causes = _own_causes(failed, pp_edit)
     fb_key = _fb_cause(causes, sim, real)
     grouped: dict[str, list[Check]] = {}
@@ -231,6 +234,7 @@ def group_failures(checks: Sequence[Check], rows: Sequence[ParamRow], edits: Seq
             primary, what = "", _centre_offsets(sim, real)
         earlier = next((c for c in out if mine and c.edits == mine), None)
         fix = (f"the same edit as {earlier.title.lower()} ({', '.join(e.parameter for e in mine)})"
-               if earlier is not None else _fix_text(key, mine, preset))
+               if earlier is not None else _fix_text(key, mine, preset,
+                                                     mujoco=any(e.parameter == "MJCF cameras" for e in edits)))
         out.append(RootCause(key, what, fix, grouped[key], mine, primary))
     return out

@@ -17,6 +17,7 @@ from typing import Any
 from s2r.errors import ValidateError
 from s2r.profile import StereoProfile
 from s2r.validate.advice import Edit, suggest_edits
+from s2r.validate.advice_mujoco import is_mujoco_sim, suggest_mujoco_edits
 from s2r.validate.causes import RootCause, group_failures
 from s2r.validate.depth_accuracy import DepthAccuracy
 from s2r.validate.params import ParamRow, parameter_table
@@ -193,6 +194,9 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
     sim, real = sim.in_opencv_pixels(), real.in_opencv_pixels()
     result.params = parameter_table(sim, real, tol)
     result.projection = projection_difference(sim, real, distance_m=tol.working_distance_m)
+    if is_mujoco_sim(sim):  # an MJCF's <camera> attributes, not a Gazebo sensor's
+        result.edits = suggest_mujoco_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
+        return
     result.edits = suggest_edits(sim, real, result.params, principal_point_px=tol.principal_point_px)
     if result.edits:
         result.gazebo_xml = _gazebo_xml(real)

@@ -124,8 +124,11 @@ def summary_lines(result: ValidationResult) -> list[str]:
         lines += recording_lines(result.recording)
     lines += _verdict_lines(result)
     xml = [e for e in result.edits if e.parameter == "sensor XML"]
+    mjcf = [e for e in result.edits if e.parameter == "MJCF cameras"]
     if xml:
         lines.append(f"  where to write each edit: --report, --json; every edit at once: {xml[0].where}")
-    lines += [f"  MuJoCo: {e.where}" for e in result.edits if e.parameter == "MJCF cameras"]
+        lines += [f"  MuJoCo: {e.where}" for e in mjcf]
+    elif mjcf:  # a MuJoCo sim: its edits are MJCF <camera> attributes
+        lines.append(f"  where to write each edit: --report, --json; every edit at once: {mjcf[0].where}")
     timing = ", ".join(f"{k} {v:.1f}s" for k, v in result.seconds.items() if k == "total")
     return [*lines, f"({timing})"]

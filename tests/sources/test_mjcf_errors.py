@@ -66,7 +66,7 @@ CASES = {
                          ("<replicate", "cameras inside <replicate> are not read")),
     "duplicate_class": ('<mujoco><default><default class="a"/><default class="a"/></default></mujoco>',
                         ("defined twice",)),
-    "no_cameras": ("<mujoco><worldbody/></mujoco>", ("no camera",)),
+    "no_cameras": ("<mujoco><worldbody/></mujoco>", ("no <camera> found in the MJCF",)),
 }
 
 
