@@ -269,3 +269,22 @@ def test_a_pair_with_two_problems_names_both(tmp_path: Path, capsys: pytest.Capt
         "(rectification needs one size) (swap --left and --right (or the camera names), or set joint '<link "
         "rig::right_cam pose>' <origin xyz=\"0 -0.06 0\" rpy=\"0 0 0\"/>; give both cameras one image size; or pass "
         "--allow-bad-baseline to write it anyway (s2r lint says the same))")
+
+
+def test_a_camera_on_a_link_of_a_missing_include_names_the_include(tmp_path: Path,
+                                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    camera = ("<sensor name='{0}' type='camera'><camera><horizontal_fov>1.0</horizontal_fov><image><width>640</width>"
+              "<height>480</height></image></camera></sensor>")
+    (tmp_path / "robot.sdf").write_text(
+        "<?xml version='1.0'?>\n<sdf version='1.9'><model name='robot'><link name='base'/>\n"
+        "<include><uri>model://sensor_mount</uri><name>mount</name></include>\n"
+        "<link name='left_cam'>" + camera.format("left") + "</link>\n"
+        "<link name='right_cam'><pose>0 -0.06 0 0 0 0</pose>" + camera.format("right") + "</link>\n"
+        "<joint name='j1' type='fixed'><parent>mount::plate</parent><child>left_cam</child></joint>\n"
+        "</model></sdf>\n")
+    assert _error(capsys, ["profile", "from-description", str(tmp_path / "robot.sdf"), "-o",
+                           str(tmp_path / "p.yaml")]) == (
+        f"error: {tmp_path / 'robot.sdf'}: <include> line 3: link 'mount::plate' (<joint name='j1'> line 6) belongs "
+        "to a model of <include> model://sensor_mount, which is not available here: model 'sensor_mount' "
+        "(model://sensor_mount) not found in any model folder (pass --package-path DIR with the folder holding "
+        "sensor_mount/, or set one of GZ_SIM_RESOURCE_PATH, IGN_GAZEBO_RESOURCE_PATH, GAZEBO_MODEL_PATH)")

@@ -16,7 +16,7 @@ from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.mjcf import parse_mjcf
 from s2r.sources.sdf import parse_sdf
-from s2r.sources.sdf_include import expand_includes
+from s2r.sources.sdf_include import SkippedInclude, expand_includes
 from s2r.sources.simulator import infer_simulator
 from s2r.sources.urdf import parse_urdf
 from s2r.sources.xacro_expand import XacroExpansion, expand_xacro_files, is_xacro
@@ -69,7 +69,10 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         description = parse_urdf(doc)
     elif doc.root.tag in ("sdf", "model", "world"):
         included, skipped = expand_includes(doc, package_paths)
-        description = parse_sdf(doc)
+        try:
+            description = parse_sdf(doc)
+        except SourceError as exc:  # a link of a model that is not here: the include is the cause, not the link
+            raise _from_missing_include(exc, skipped) from None
         description.included_files, description.skipped_includes = included, skipped
     elif doc.root.tag == "mujoco":
         description = parse_mjcf(doc, keyframe=keyframe)
@@ -83,6 +86,20 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
     description.simulator = infer_simulator(doc, lines=not uses_xacro)
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description
+
+
+def _from_missing_include(exc: SourceError, skipped: Sequence[SkippedInclude]) -> SourceError:
+    """``exc`` (a link no <link> declares) named as what it is when a skipped ``<include>`` would have brought it:
+    the include, and where s2r looks for models; else ``exc`` itself."""
+    candidates = [s for s in skipped if not s.cameraless]
+    missing = re.findall(r"'([^']+::[^']+)'", exc.message)
+    if not candidates or not missing or not ("names no link" in exc.message or "not declared" in exc.message):
+        return exc
+    model = missing[0].split("::")[0]
+    include = next((s for s in candidates if model in s.uri), candidates[0])
+    return SourceError(f"link {missing[0]!r} ({exc.field}) belongs to a model of <include> {shown(include.uri)}, "
+                       f"which is not available here: {include.message}", path=include.path, field=include.field,
+                       hint=include.hint)
 
 
 #: Elements a URDF <robot> holds; anything else left after xacro may be an unexpanded (legacy) macro call.
