@@ -116,3 +116,14 @@ def test_a_recording_file_first_is_reversed_too_but_two_recordings_are_not(capsy
     (tmp_path / "d").mkdir()
     assert main(["sensor", "apply", str(tmp_path / "d"), str(tmp_path / "d"), "-o", str(tmp_path / "o")]) == 2
     assert "reversed" not in capsys.readouterr().err
+
+
+def test_a_fleet_sized_stage_logs_each_robot_as_it_finishes() -> None:
+    stream = io.StringIO()
+    bar = ProgressBar(stream=stream, log_every_s=0.2)
+    bar(0, 5, "checking robots")
+    time.sleep(0.25)  # past the quiet start
+    bar(1, 5, "checking robots")  # the first robot done is a line at once, not a heartbeat later
+    bar(2, 5, "checking robots")
+    lines = [line.split(" (")[0] for line in stream.getvalue().splitlines()]
+    assert lines[-2:] == ["progress: checking robots 1/5", "progress: checking robots 2/5"]

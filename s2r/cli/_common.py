@@ -134,13 +134,19 @@ def add_force(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="replace existing outputs")
 
 
+#: A stage of at most this many steps (a fleet's robots) logs every step: each is long, and the first one
+#: done is news (a fleet showed "0/5" for a minute while its workers started, then nothing until the heartbeat).
+EACH_STEP_TOTAL = 20
+
+
 class ProgressBar:
     """A progress callback for stderr: a redrawn bar on a terminal, plain log lines elsewhere.
 
     On a terminal it draws ``label [#####-----] done/total``. On anything else (a pipe, a CI log, a file) it
-    prints ``progress: label done/total (elapsed s)`` lines: when a stage starts, when it ends, and at least every
-    ``log_every_s`` seconds while one runs (a daemon heartbeat thread repeats the last state, so a slow stage
-    between two callbacks still shows it is alive). Nothing is logged in the first ``log_every_s``: a quick run
+    prints ``progress: label done/total (elapsed s)`` lines: when a stage starts, when it ends, at every step of a
+    stage of at most :data:`EACH_STEP_TOTAL` steps, and at least every ``log_every_s`` seconds while one runs (a
+    daemon heartbeat thread repeats the last state, so a slow stage between two callbacks still shows it is
+    alive). Nothing is logged in the first ``log_every_s``: a quick run
     (or a one-line error, which bad input gives within seconds) stays as short as it was.
     """
 
@@ -185,7 +191,8 @@ class ProgressBar:
             stage_changed = previous is None or previous[2] != label
             if now - self._start < self.log_every_s:  # a run that ends within seconds stays silent
                 pass
-            elif stage_changed or done >= total or now - self._printed_at >= self.log_every_s:
+            elif stage_changed or done >= total or now - self._printed_at >= self.log_every_s \
+                    or (total <= EACH_STEP_TOTAL and previous is not None and done != previous[0]):
                 self._print_state(now)
             if self._heartbeat is None:
                 self._heartbeat = threading.Thread(target=self._beat, name="s2r-progress", daemon=True)
