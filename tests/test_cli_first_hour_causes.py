@@ -88,6 +88,19 @@ def test_a_wrong_board_size_is_named_with_the_size_that_is_there(tmp_path: Path,
         "error: --pattern: no 5x4 chessboard found; the images hold a 9x6 board (inner corners): use --pattern 9x6")
 
 
+@pytest.mark.parametrize("command", [["depth-quality", "realsense_d435_848x480", "--right", "RIGHT"],
+                                     ["sensor", "fit", "realsense_d435_848x480", "-o", "OUT"]])
+def test_depth_quality_and_sensor_fit_name_the_board_size_too(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                              command: list[str]) -> None:
+    for i in range(3):
+        _board(tmp_path / "left" / f"{i}.png")
+        _board(tmp_path / "right" / f"{i}.png")
+    argv = [str(tmp_path / "right") if a == "RIGHT" else str(tmp_path / "s.yaml") if a == "OUT" else a
+            for a in command]
+    assert _error(capsys, [*argv, "--left", str(tmp_path / "left"), "--pattern", "10x7", "--square", "0.025"]) == (
+        "error: --pattern: no 10x7 chessboard found; the images hold a 9x6 board (inner corners): use --pattern 9x6")
+
+
 def test_opencv_sample_set_with_squares_counted_is_told_its_inner_corners(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     if not OPENCV_SET.is_dir():

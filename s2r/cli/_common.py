@@ -19,7 +19,8 @@ if TYPE_CHECKING:
     from s2r.profile import StereoProfile
 
 __all__ = ["ProgressBar", "add_force", "add_json", "add_profile_positional", "add_recording_inputs", "argparse_type",
-           "load_profile", "parse_distances", "parse_pattern", "print_json", "profile_argument", "to_jsonable"]
+           "check_left_board", "load_profile", "parse_distances", "parse_pattern", "print_json", "profile_argument",
+           "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -73,6 +74,15 @@ def profile_argument(args: argparse.Namespace, *, command: str) -> str:
         raise ProfileError(f"two profiles given: {positional} and --profile {option}", field="PROFILE",
                            hint=f"give one: s2r {command} PROFILE ...")
     return str(positional if positional is not None else option)
+
+
+def check_left_board(left: str, pattern: tuple[int, int]) -> None:
+    """The board-size check of :func:`s2r.calib.detect.board_size.check_board_size` on a recording's ``--left``
+    images (folder or glob): CalibrationError naming the board size that is there when ``pattern`` is not."""
+    from s2r.calib.detect.board_size import check_board_size
+    from s2r.quality.inputs import IMAGE_SUFFIXES, list_files
+
+    check_board_size(list_files(left, IMAGE_SUFFIXES, option="--left"), pattern)
 
 
 def argparse_type(parse: Callable[[str], T]) -> Callable[[str], T]:

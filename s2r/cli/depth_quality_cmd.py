@@ -16,6 +16,7 @@ from s2r.cli._common import (
     add_json,
     add_recording_inputs,
     argparse_type,
+    check_left_board,
     load_profile,
     parse_pattern,
     print_json,
@@ -101,6 +102,8 @@ def _measure(args: argparse.Namespace, profile: StereoProfile, source: Recording
     from s2r.quality.run import measure_board_views, measure_wall_views
     from s2r.quality.source import open_source
 
+    if not args.wall and args.left is not None:  # a wrong --pattern named in a second, before every frame's search
+        check_left_board(args.left, args.pattern)
     opened = open_source(profile, source, preset=args.preset, num_disparities=args.num_disparities)
     bar = ProgressBar(enabled=False if (args.quiet or args.json) else None)
     keep = REPORT_FRAMES if args.report else 0

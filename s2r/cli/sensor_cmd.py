@@ -16,6 +16,7 @@ from s2r.cli._common import (
     add_profile_positional,
     add_recording_inputs,
     argparse_type,
+    check_left_board,
     load_profile,
     parse_pattern,
     print_json,
@@ -159,6 +160,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     _check_fit_args(args)
     profile = load_profile(profile_argument(args, command="sensor fit"))
+    if args.left is not None:  # a wrong --pattern named in a second, before every frame's search
+        check_left_board(args.left, args.pattern)
     check_output_free(args.out, force=args.force)
     if args.profile_out:
         check_output_free(args.profile_out, force=args.force)
