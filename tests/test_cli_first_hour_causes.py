@@ -262,7 +262,10 @@ def test_validate_of_a_mujoco_sim_ends_with_the_export_of_the_users_real_file(
     assert main(["validate", str(tmp_path / "rig.xml"), str(real), "--left", "ir_left", "--right", "ir_right",
                  "--quick", "-q"]) == 1
     out = capsys.readouterr().out
-    assert "fix: intrinsics: focalpixel=" not in out and "export-gazebo" not in out and "horizontal_fov" not in out
+    assert "export-gazebo" not in out and "horizontal_fov" not in out and "hackBaseline" not in out
+    assert "     fix: resolution 640 480 -> 848 480" in out
+    assert ('fix: intrinsics focalpixel="432.971 432.971" principalpixel="0 0" (both) -> focalpixel="424 424" '
+            'principalpixel="1 4.5" (both)') in " ".join(out.split())  # the summary wraps long lines
     assert (f"  where to write each edit: --report, --json; every edit at once: s2r profile export-mujoco '{real}' "
             "-o my_d435_cameras.xml") in out
 
