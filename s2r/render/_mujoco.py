@@ -208,11 +208,12 @@ def check_scene(scene_path: str | None, camera: str | None, *, probe_gl: bool) -
     The scene is read here (:func:`s2r.render.mjcf_world.read_world`) and compiled once in a child process under
     :data:`COMPILE_LIMITS`, so what no attribute bounds (a mesh's hull, ``<replicate>``) cannot exhaust this one."""
     mj = _import_mujoco()
+    if scene_path is not None:  # first (it reads files only): in this process, so every compile sees these bytes
+        read_world(scene_path)
     if probe_gl:
         check_mujoco()
     if scene_path is None:
         return
-    read_world(scene_path)  # in this process: the child's result and the later compiles see the same bytes
     try:
         run_limited(lambda: _check_compiles(mj, scene_path, camera), path=Path(scene_path),
                     what="compiling the world", limits=COMPILE_LIMITS, field="--world",

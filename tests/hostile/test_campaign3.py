@@ -194,7 +194,7 @@ def test_validate_refuses_a_bad_recording_before_any_render(tmp_path: Path) -> N
 
 # -- class 17: SIGTERM cleans up like SIGINT -------------------------------------------------------------------------
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, pytest.param(signal.SIGINT, marks=pytest.mark.slow)])
 def test_sigterm_during_sensor_apply_leaves_nothing_and_the_rerun_works(tmp_path: Path, sig: int) -> None:
     model, rig = _sensor(tmp_path)
     (tmp_path / "d").mkdir()
