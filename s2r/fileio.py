@@ -9,6 +9,7 @@ import hashlib
 import io
 import os
 import stat
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,11 +31,44 @@ __all__ = [
     "check_output_free",
     "npy_bytes",
     "prepare_output_dir",
+    "read_file_head",
     "read_npy",
     "read_regular_file",
     "read_text_file",
+    "removing_new_folders_on_failure",
     "sha256_file",
 ]
+
+#: Folders created by this process, one list per active :func:`removing_new_folders_on_failure` block.
+_NEW_FOLDERS: list[list[Path]] = []
+
+
+@contextlib.contextmanager
+def removing_new_folders_on_failure() -> Iterator[None]:
+    """Within the block, output folders created here (:func:`prepare_output_dir`, an :class:`OutputBatch`'s
+    subfolders) are remembered; when the block ends with an exception (bad input found after ``-o DIR`` was
+    prepared, Ctrl-C, SIGTERM), those still empty are removed again, deepest first, so a refused run leaves
+    nothing behind and its rerun is not refused. The CLI runs every command inside one."""
+    made: list[Path] = []
+    _NEW_FOLDERS.append(made)
+    try:
+        yield
+    except BaseException:
+        for folder in reversed(made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()  # only an empty folder: published files keep theirs
+        raise
+    finally:
+        _NEW_FOLDERS.remove(made)
+
+
+def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
+    """``folder.mkdir(parents=True, exist_ok=exist_ok)``, remembering each folder it created (see
+    :func:`removing_new_folders_on_failure`)."""
+    missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
+    folder.mkdir(parents=True, exist_ok=exist_ok)
+    if _NEW_FOLDERS:
+        _NEW_FOLDERS[-1].extend(reversed(missing))
 
 
 def _lstat(path: Path) -> os.stat_result | None:
@@ -107,7 +141,7 @@ def _check_below_root(root: Path, out: Path) -> None:
         raise S2RError("is outside the output folder", path=out, hint=f"write inside {root}") from None
     if len(rel.parts) > 1 and _lstat(root) is None:
         try:
-            root.mkdir(parents=True, exist_ok=True)
+            _make_folders(root)
         except OSError as exc:
             raise _cannot_write(root, exc) from None
     current = root
@@ -118,7 +152,7 @@ def _check_below_root(root: Path, out: Path) -> None:
         st = _lstat(current)
         if st is None:
             try:
-                current.mkdir()
+                _make_folders(current, exist_ok=False)
             except FileExistsError:
                 pass
             except OSError as exc:
@@ -143,7 +177,7 @@ def _write_temporary(out: Path, data: bytes, *, sync: bool = True) -> str:
 
     parent = out.parent if str(out.parent) else Path(".")
     try:
-        parent.mkdir(parents=True, exist_ok=True)
+        _make_folders(parent)
         fd, tmp_name = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".tmp", dir=parent)
     except FileExistsError:
         raise S2RError("is a file, expected a folder", path=parent, hint="choose an output folder") from None
@@ -350,8 +384,8 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
     out = check_output_dir(path, force=force)
     existed = _lstat(out) is not None
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.mkdir(exist_ok=force or existed)
+        _make_folders(out.parent)
+        _make_folders(out, exist_ok=force or existed)
     except FileExistsError:
         raise OutputExistsError("was created by another run meanwhile; nothing was overwritten", path=out,
                                 hint="pass --force to reuse it") from None
@@ -425,6 +459,19 @@ def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None
         return data
     finally:
         os.close(fd)
+
+
+def read_file_head(path: str | Path, nbytes: int) -> bytes:
+    """The first ``nbytes`` of the regular file ``path`` (all of it when shorter): a header to judge before the
+    whole file is read. Opened without blocking; a device, FIFO or socket is :class:`NotARegularFile`."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+        if not stat.S_ISREG(info.st_mode):
+            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+        return handle.read(nbytes)
 
 
 #: Largest ``.npy`` array read (bytes of data): a 4K float64 depth image is 66 MB.

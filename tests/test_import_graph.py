@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 #: (or from itself). formats and sources share a layer and must not import each other; so do
 #: calib, depth and render.
 LAYERS: dict[str, int] = {
-    "_version": 0, "errors": 0, "progress": 0, "limits": 0,
+    "_version": 0, "errors": 0, "progress": 0, "limits": 0, "names": 0,
     "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1, "sensor_model": 1,  # none of these import each other
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,

@@ -1,9 +1,9 @@
 """The ``s2r`` command line: parses arguments, calls the library, prints, returns an exit code.
 
 Exit codes: 0 ok, 1 a check failed (a finding), 2 bad input or usage, 3 an internal error (a bug in s2r),
-130 interrupted (Ctrl-C). Errors print as one ``error: ...`` line on stderr; ``--debug`` shows the traceback
-instead. Warnings from the library (logging) go to stderr. Output piped into a reader that stops early
-(``s2r ... | head``) ends the run quietly with exit 0.
+130 interrupted (Ctrl-C), 143 terminated (SIGTERM, cleaned up like Ctrl-C). Errors print as one ``error: ...``
+line on stderr; ``--debug`` shows the traceback instead. Warnings from the library (logging) go to stderr. Output
+piped into a reader that stops early (``s2r ... | head``) ends the run quietly with exit 0.
 """
 
 from __future__ import annotations
@@ -34,11 +34,13 @@ from s2r.cli import (  # _process first: its process-wide settings (BLAS threads
     validate_cmd,
 )
 from s2r.cli._order import reversed_arguments
+from s2r.cli._process import Terminated, sigterm_as_interrupt
 from s2r.errors import S2RError, terminal_safe
 
 __all__ = ["build_parser", "entry", "main"]
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+EXIT_TERMINATED = 143  # SIGTERM (128 + 15), after the same clean-up as Ctrl-C
 _WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EDQUOT, errno.EPERM})
 _REPORT_HINT = "this is a bug in s2r: rerun with --debug and report the command and the traceback"
 
@@ -209,7 +211,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return EXIT_BAD_INPUT
         args = parser.parse_args(argv)
         _configure_logging(args.quiet)
-        return _run(args)
+        with sigterm_as_interrupt():
+            return _run(args)
     finally:  # an in-process caller (a script, a test) gets its streams and s2r's logger back as they were
         sys.stdout, sys.stderr = streams
         logger.handlers[:], logger.level, logger.propagate = logging_state
@@ -234,13 +237,16 @@ def entry() -> NoReturn:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from s2r.fileio import removing_new_folders_on_failure
+
     try:
-        code: int = args.func(args)
+        with removing_new_folders_on_failure():  # a refused run leaves no empty -o / --report folder behind
+            code: int = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the boundary, not at interpreter exit
     except BrokenPipeError:
         return _quiet_broken_pipe()
-    except KeyboardInterrupt:
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     except Exception as exc:
         if args.debug:
             raise

@@ -18,14 +18,23 @@
   dynamic threshold once it has risen. Worker processes inherit the settings (fork). Nothing changes without
   glibc (musl, macOS) or when the user tuned malloc (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``
   or ``glibc.malloc`` tunables in ``GLIBC_TUNABLES``).
+- **SIGTERM is an interrupt** (:func:`sigterm_as_interrupt`, around each command): ``timeout`` and ``kill`` send
+  SIGTERM, whose default action ends the process at once, so ``.s2r-tmp-*`` temporaries stayed behind and the
+  rerun was refused. It now raises :class:`Terminated` (a ``KeyboardInterrupt``) in the main thread, and every
+  output is cleaned up the way Ctrl-C cleans it up; the exit code is 143 (128 + 15).
 """
 
 from __future__ import annotations
 
 import ctypes
 import os
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from types import FrameType
 
-__all__ = ["MMAP_THRESHOLD_BYTES", "TRIM_THRESHOLD_BYTES"]
+__all__ = ["MMAP_THRESHOLD_BYTES", "TRIM_THRESHOLD_BYTES", "Terminated", "sigterm_as_interrupt"]
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
@@ -59,3 +68,34 @@ def _tune_malloc() -> None:
 
 
 _tune_malloc()
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: raised where Ctrl-C raises ``KeyboardInterrupt``, so the same clean-up runs."""
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Terminated` in this process's main thread.
+
+    Nothing changes when called from another thread or when SIGTERM already has a handler (a host program's).
+    A forked child (a worker of a process pool) that inherited the handler ends as SIGTERM's default would.
+    """
+    if threading.current_thread() is not threading.main_thread() \
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        yield
+        return
+    owner = os.getpid()
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        if os.getpid() != owner:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        raise Terminated
+
+    signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)

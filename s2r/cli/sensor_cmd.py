@@ -204,6 +204,7 @@ def _fit_lines(model: Any, notes: dict[str, str]) -> list[str]:
 def _cmd_apply(args: argparse.Namespace) -> int:
     from s2r.quality.inputs import DEPTH_SUFFIXES, list_files
     from s2r.quality.views import device_fb
+    from s2r.sensor.depth_files import check_depth_sizes
     from s2r.sensor.files import load_sensor_model
     from s2r.sensor_fit.apply_files import apply_to_files
 
@@ -214,6 +215,7 @@ def _cmd_apply(args: argparse.Namespace) -> int:
     profile = load_profile(profile_argument(args, command="sensor apply"))
     model = load_sensor_model(args.model)
     sources = list_files(args.depth, DEPTH_SUFFIXES, option="DEPTH")
+    check_depth_sizes(sources, size=(profile.left.width_px, profile.left.height_px))  # before any is decoded
     written = apply_to_files(model, sources, args.out, fb_px_m=device_fb(profile), seed=args.seed,
                              depth_scale_m=args.depth_scale, force=args.force)
     if args.json:

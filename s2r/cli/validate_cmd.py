@@ -122,6 +122,12 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         settings = dataclasses.replace(settings, distances_m=distances_in_view(
             [p for p in (sim, real) if p is not None], settings.preset, settings.distances_m))
     recording = _recording(args, real is not None)
+    if recording is not None and real is not None:  # every input opened and checked before the first render
+        from s2r.validate.recording import check_recording_opens
+
+        check_recording_opens(real, recording.folder, option="--recording", preset=settings.preset)
+        if recording.sim is not None:
+            check_recording_opens(sim, recording.sim, option="--sim-recording", preset=settings.preset)
     if args.report:
         prepare_output_dir(args.report, force=args.force)  # fail before the work, not after
     quiet = args.quiet or args.json

@@ -21,7 +21,6 @@ of a ``--scheduler`` cluster must see the profiles and recordings at the same pa
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +31,7 @@ from s2r.drift.source import StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
 from s2r.fileio import read_text_file
+from s2r.names import NAME_HINT, is_safe_name
 from s2r.progress import ProgressCallback, report
 from s2r.safeparse import parse_yaml
 
@@ -39,7 +39,6 @@ __all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "RobotJob", "load_fleet"
 
 #: Verdicts from most to least severe (the summary's sort order).
 SEVERITY = ("failed", "drifted", "cannot tell", "good")
-_NAME = re.compile(r"^[A-Za-z0-9_\-][A-Za-z0-9_.\-]{0,63}$")  # never "." or "..": names are folders in -o
 #: Names the fleet's own output files take in -o (compared case-insensitively, as some file systems do).
 RESERVED_NAMES = frozenset({"index.html", "summary.json"})
 #: Largest fleet file (characters) and number of robots in one run.
@@ -111,9 +110,9 @@ def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 2
         if not isinstance(entry, dict) or not {"name", "profile", "recording"} <= entry.keys():
             raise CheckError("each robot needs name, profile and recording", path=path, field=where)
         name = entry["name"]
-        if not isinstance(name, str) or not _NAME.match(name) or name.lower() in seen | RESERVED_NAMES:
+        if not is_safe_name(name) or name.lower() in seen | RESERVED_NAMES:
             raise CheckError(f"bad or repeated name {name!r}", path=path, field=f"{where}.name",
-                             hint="unique names (ignoring case) of letters, digits, _ . -, not starting with '.', "
+                             hint=f"unique names (ignoring case) of {NAME_HINT}, "
                              "nor index.html or summary.json: they name the report folders")
         seen.add(name.lower())
         jobs.append(RobotJob(name, _profile(base, entry["profile"], f"{where}.profile", path),

@@ -30,19 +30,22 @@ import os
 import subprocess
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from s2r.errors import RenderError
+from s2r.errors import RenderError, SourceError
 from s2r.executor import child_environment
 from s2r.render.camera import PinholeView
+from s2r.render.mjcf_world import read_world
 from s2r.render.world import Surface
+from s2r.sources.isolation import Limits, run_limited
 
-__all__ = ["MujocoBackend", "check_mujoco", "check_scene", "gl_unavailable_reason", "load_spec",
-           "optical_to_mujoco_quat", "scene_camera_pose"]
+__all__ = ["COMPILE_LIMITS", "MAX_WORLD_M", "MujocoBackend", "check_mujoco", "check_scene", "gl_unavailable_reason",
+           "load_spec", "optical_to_mujoco_quat", "scene_camera_pose"]
 
 log = logging.getLogger("s2r.render")
 
@@ -54,6 +57,10 @@ _PIXEL_M = 1e-6
 #: Depth values at or above this share of the far plane count as nothing hit.
 _BACKGROUND_FRACTION = 0.999
 #: The left camera at the scene's origin looking along +x with +z up (a robot's forward axis).
+#: Farthest a world camera may sit from the world's origin (metres): past it float32 GL loses the scene.
+MAX_WORLD_M = 1e4
+#: Limits of the child process that compiles a world once before it is rendered.
+COMPILE_LIMITS = Limits(cpu_s=60, memory_bytes=2 << 30, wall_s=120.0)
 _DEFAULT_SCENE_POSE = np.array([[0.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0],
                                 [0.0, 0.0, 0.0, 1.0]])
 
@@ -148,15 +155,17 @@ def _one_line(exc: Exception) -> str:
 
 
 def load_spec(mj: Any, scene_path: str | None) -> Any:
-    """The MjSpec of ``scene_path`` (includes resolved by MuJoCo), or an empty world lit flat (ambient only)."""
+    """The MjSpec of ``scene_path`` as s2r read it (:func:`s2r.render.mjcf_world.read_world`: includes and assets
+    confined and bounded, MuJoCo opens no file), or an empty world lit flat (ambient only)."""
     if scene_path is None:
         spec = mj.MjSpec()
         spec.visual.headlight.ambient = [1.0, 1.0, 1.0]
         spec.visual.headlight.diffuse = [0.0, 0.0, 0.0]
         spec.visual.headlight.specular = [0.0, 0.0, 0.0]
         return spec
+    world = read_world(scene_path)
     try:
-        return mj.MjSpec.from_file(scene_path)
+        return mj.MjSpec.from_string(world.xml, assets=world.assets)
     except Exception as exc:  # MuJoCo raises plain ValueError/RuntimeError for every parse problem
         raise RenderError(f"MuJoCo cannot load the scene ({_one_line(exc)})", path=scene_path, field="--world",
                           hint="check the file with MuJoCo's simulate or compile()") from exc
@@ -185,18 +194,39 @@ def scene_camera_pose(mj: Any, scene_path: str, camera: str) -> FloatArray:
     T = np.eye(4)
     T[:3, :3] = data.cam_xmat[cam].reshape(3, 3) @ FLIP
     T[:3, 3] = data.cam_xpos[cam]
+    if not (np.isfinite(T).all() and np.abs(T[:3, 3]).max() <= MAX_WORLD_M):
+        raise RenderError(f"camera {camera!r} sits at {np.array2string(T[:3, 3], precision=3)} m: not a finite "
+                          f"position within {MAX_WORLD_M:g} m of the world's origin", path=scene_path,
+                          field="--world-camera", hint="fix the camera's (or its bodies') pos and quat")
     return T
 
 
 def check_scene(scene_path: str | None, camera: str | None, *, probe_gl: bool) -> None:
     """Raise RenderError when MuJoCo is missing, the scene (and its camera) cannot be used, or (``probe_gl``, in a
-    child process) no offscreen GL context can be created; no GL context is created in this process."""
+    child process) no offscreen GL context can be created; no GL context is created in this process.
+
+    The scene is read here (:func:`s2r.render.mjcf_world.read_world`) and compiled once in a child process under
+    :data:`COMPILE_LIMITS`, so what no attribute bounds (a mesh's hull, ``<replicate>``) cannot exhaust this one."""
     mj = _import_mujoco()
+    if scene_path is not None:  # first (it reads files only): in this process, so every compile sees these bytes
+        read_world(scene_path)
     if probe_gl:
         check_mujoco()
-    if scene_path is not None and camera is not None:
+    if scene_path is None:
+        return
+    try:
+        run_limited(lambda: _check_compiles(mj, scene_path, camera), path=Path(scene_path),
+                    what="compiling the world", limits=COMPILE_LIMITS, field="--world",
+                    hint="a world too large to render (meshes, replicated bodies); simplify it")
+    except SourceError as exc:
+        raise RenderError(exc.message, path=exc.path, field=exc.field, hint=exc.hint) from None
+
+
+def _check_compiles(mj: Any, scene_path: str, camera: str | None) -> None:
+    """Compile the scene (and place its camera): the work :func:`check_scene` runs in a limited child."""
+    if camera is not None:
         scene_camera_pose(mj, scene_path, camera)
-    elif scene_path is not None:
+    else:
         _compiled_scene(mj, scene_path)
 
 

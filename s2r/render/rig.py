@@ -20,8 +20,8 @@ from s2r.render.world import Surface
 from s2r.sensor.images import degrade_image
 from s2r.sensor_model import SensorModel
 
-__all__ = ["StereoJob", "check_render_options", "finish_image", "render_stereo", "render_stereo_images",
-           "stereo_setups"]
+__all__ = ["MAX_RENDER_PIXELS", "StereoJob", "check_render_options", "check_render_size", "finish_image",
+           "render_stereo", "render_stereo_images", "stereo_setups"]
 
 MAX_SUPERSAMPLE = 8
 
@@ -38,8 +38,28 @@ def check_render_options(*, supersample: int, noise_sigma: float, right_gain: fl
         raise RenderError(f"right gain must be positive, got {right_gain}", field="right_gain", hint="1.0 = equal")
 
 
+#: Most supersampled pixels one camera is rendered at (width x height x supersample^2): a render holds about
+#: 85 bytes per supersampled pixel (rays, maps, the wide render, its depth; 1.5 GB for 2048x2048 at 2x), so this
+#: bounds one render near 2.8 GB. 3840x2160 at 2x fits; a 16384x16384 profile (88 GB) is refused in one line.
+MAX_RENDER_PIXELS = 1 << 25
+
+
+def check_render_size(profile: StereoProfile, *, supersample: int) -> None:
+    """Raise RenderError when a camera of ``profile`` at ``supersample`` passes :data:`MAX_RENDER_PIXELS`."""
+    for side, cam in (("left", profile.left), ("right", profile.right)):
+        pixels = cam.width_px * cam.height_px * supersample ** 2
+        if pixels > MAX_RENDER_PIXELS:
+            hint = "pass --supersample 1" if supersample > 1 and pixels // supersample ** 2 <= MAX_RENDER_PIXELS \
+                else "render a smaller camera's profile"
+            raise RenderError(f"rendering {cam.width_px}x{cam.height_px} px at supersample {supersample} needs about "
+                              f"{pixels * 85 / 1e9:.0f} GB; s2r renders at most {MAX_RENDER_PIXELS / 1e6:.1f} million "
+                              "supersampled pixels a camera", field=f"{side}.width_px", hint=hint)
+
+
 def stereo_setups(profile: StereoProfile, *, supersample: int) -> tuple[CameraSetup, CameraSetup]:
-    """Left and right :class:`CameraSetup` of ``profile`` (clip planes from ``profile.simulation``)."""
+    """Left and right :class:`CameraSetup` of ``profile`` (clip planes from ``profile.simulation``); RenderError
+    when a camera is too large to render (:func:`check_render_size`)."""
+    check_render_size(profile, supersample=supersample)
     near, far = clip_planes(profile)
     T_right_world = np.eye(4)
     T_right_world[:3, :3], T_right_world[:3, 3] = profile.R, profile.T

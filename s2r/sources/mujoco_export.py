@@ -20,13 +20,13 @@ pinhole render), which ``s2r render ... --renderer mujoco`` does.
 from __future__ import annotations
 
 import math
-import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import SourceError
+from s2r.names import NAME_HINT, is_safe_name
 from s2r.profile import Camera, StereoProfile
 from s2r.sources.description import FloatArray
 
@@ -38,7 +38,6 @@ R_BODY_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 _FLIP = np.diag([1.0, -1.0, -1.0])
 #: Nominal pixel pitch of the written sensorsize, metres.
 PIXEL_PITCH_M = 3e-6
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.:-]{0,99}$")
 #: Residuals below this many pixels are not worth a warning.
 _NEGLIGIBLE_PX = 0.01
 
@@ -115,9 +114,9 @@ def export_mujoco(profile: StereoProfile, *, body: str = "s2r_stereo") -> tuple[
     Raises:
         SourceError: ``body`` is not a usable MJCF name.
     """
-    if not _NAME.match(body):
+    if not is_safe_name(body):
         raise SourceError(f"not a usable MJCF body name: {body!r}", field="--body",
-                          hint="letters, digits and _ . : - (starting with a letter or _)")
+                          hint=NAME_HINT)
     p = profile.in_opencv_pixels()
     T_body_left = np.eye(4)
     T_body_left[:3, :3] = R_BODY_OPTICAL

@@ -31,7 +31,8 @@ from s2r.validate.recording_bins import compare_bins
 from s2r.validate.tolerances import Tolerances
 from s2r.validate.verdict import Check
 
-__all__ = ["RecordingComparison", "compare_recording", "compare_recordings", "recording_checks"]
+__all__ = ["RecordingComparison", "check_recording_opens", "compare_recording", "compare_recordings",
+           "recording_checks"]
 
 
 @dataclass
@@ -57,6 +58,30 @@ class RecordingComparison:
 
 def _source(src: str | Path | RecordingSource, option: str) -> RecordingSource:
     return src if isinstance(src, RecordingSource) else parse_source(str(src), option=option)
+
+
+def check_recording_opens(profile: StereoProfile, src: str | Path | RecordingSource, *, option: str,
+                          preset: str) -> None:
+    """Open the recording ``src`` for ``profile`` and read its first frame, before any render: a bag that is not
+    one (``bag=/dev/null``), a missing topic, an unreadable or wrongly sized first image is refused in seconds,
+    not after the renders (15-32 CPU-s). The comparison opens it again from the start.
+
+    Raises:
+        S2RError: what opening or reading the first frame raises; ValidateError when it holds no frame.
+    """
+    from s2r.errors import ValidateError
+
+    source = _source(src, option)
+    views = iter(open_source(profile, source, preset=preset).views)
+    try:
+        next(views)
+    except StopIteration:
+        raise ValidateError("the recording holds no frames", path=source.describe(), field=option,
+                            hint="pass a recording with stereo pairs (or images and device depth)") from None
+    finally:
+        close = getattr(views, "close", None)
+        if close is not None:
+            close()
 
 
 def _measure(profile: StereoProfile, source: RecordingSource, *, side: str, pattern: tuple[int, int],

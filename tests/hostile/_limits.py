@@ -18,9 +18,9 @@ TIMEOUT_S = 20.0
 MEMORY_LIMIT_BYTES = 1 << 30
 
 
-def _limits(file_size: int | None) -> Callable[[], None]:
+def _limits(file_size: int | None, memory_bytes: int = MEMORY_LIMIT_BYTES) -> Callable[[], None]:
     def apply() -> None:
-        resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
+        resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
         if file_size is not None:
             resource.setrlimit(resource.RLIMIT_FSIZE, (file_size, file_size))
             signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
@@ -28,10 +28,11 @@ def _limits(file_size: int | None) -> Callable[[], None]:
     return apply
 
 
-def run_s2r(*argv: str, file_size: int | None = None, cwd: str | None = None,
-            timeout_s: float = TIMEOUT_S) -> subprocess.CompletedProcess[str]:
+def run_s2r(*argv: str, file_size: int | None = None, cwd: str | None = None, timeout_s: float = TIMEOUT_S,
+            memory_bytes: int = MEMORY_LIMIT_BYTES) -> subprocess.CompletedProcess[str]:
     """``python -m s2r ARGV`` under the bounds; raises ``subprocess.TimeoutExpired`` past ``timeout_s`` (a
-    former hang; longer only for runs that do real work, such as a calibration on a loaded machine)."""
+    former hang; longer only for runs that do real work, such as a calibration on a loaded machine).
+    ``memory_bytes``: a larger address-space cap for runs that load a GL stack (MuJoCo: EGL maps ~1 GB)."""
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
     return subprocess.run([sys.executable, "-m", "s2r", *argv], capture_output=True, text=True, timeout=timeout_s,
-                          check=False, env=env, cwd=cwd, preexec_fn=_limits(file_size))
+                          check=False, env=env, cwd=cwd, preexec_fn=_limits(file_size, memory_bytes))

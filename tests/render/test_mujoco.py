@@ -220,7 +220,7 @@ def test_render_refuses_bad_worlds_in_one_line(tmp_path: Path, capsys: pytest.Ca
 def test_unreadable_world_writes_no_mujoco_log(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     """MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory unless told otherwise."""
-    (tmp_path / "world").write_text("<mujoco/>")  # no extension: MuJoCo cannot tell the format, and warns
+    (tmp_path / "world").write_text("<mujoco><bogus/></mujoco>")  # MuJoCo refuses it (s2r reads the file itself now)
     monkeypatch.chdir(tmp_path)
     code = main(["render", "boards", "gazebo_dual_camera", "--renderer", "mujoco", "--world", "world", "-o", "o"])
     err = capsys.readouterr().err.strip()

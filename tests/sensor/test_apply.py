@@ -70,7 +70,7 @@ def test_apply_bad_input_is_one_line(tmp_path, capsys: pytest.CaptureFixture[str
     bad = tmp_path / "bad.yaml"
     bad.write_text("image_noise_dn: '3'\n")
     (tmp_path / "d").mkdir()
-    np.save(tmp_path / "d" / "00.npy", np.full((20, 20), 1.0, np.float32))
+    np.save(tmp_path / "d" / "00.npy", np.full((240, 320), 1.0, np.float32))  # the rig's size
     assert main(["sensor", "apply", str(bad), str(tmp_path / "d"), "--profile", str(rig), "-o",
                  str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
@@ -79,7 +79,7 @@ def test_apply_bad_input_is_one_line(tmp_path, capsys: pytest.CaptureFixture[str
     good = dump_sensor_model(MODEL, tmp_path / "good.yaml")
     assert main(["sensor", "apply", str(good), str(tmp_path / "d"), "--profile", str(rig), "-o",
                  str(tmp_path / "out")]) == 0
-    assert np.load(tmp_path / "out" / "00.npy").shape == (20, 20)
+    assert np.load(tmp_path / "out" / "00.npy").shape == (240, 320)
     assert main(["sensor", "apply", str(good), str(tmp_path / "d"), "--profile", str(rig), "-o",
                  str(tmp_path / "out")]) == 2  # the folder holds files: not overwritten
 
