@@ -150,3 +150,13 @@ def test_damaged_files_get_libpngs_outcome(tmp_path: Path) -> None:
             assert pixels == want.tobytes(), name
         else:
             assert reason == "corrupt PNG image data", name
+
+
+def test_running_sums_are_exact_where_the_integral_image_would_pass_2_to_the_31() -> None:
+    """All-255 rows, 9000 x 1000: one integral image over them would sum to 2.3e9 (past int32); taken in
+    bands it gives numpy's running sums mod 256 exactly."""
+    from s2r.imageio import _running_sums
+
+    rows = np.full((9000, 1000), 255, np.uint8)
+    rows[::7, ::3] = 1
+    assert np.array_equal(_running_sums(rows), np.cumsum(rows, axis=1, dtype=np.uint8))
