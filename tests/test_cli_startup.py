@@ -40,6 +40,15 @@ def test_profile_show_list_convert_load_no_heavy_library(tmp_path: Path) -> None
     assert out.is_file()
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["calibrate", "--help"], ["validate", "--help"]])
+def test_help_and_version_load_no_heavy_library(argv: list[str]) -> None:
+    """``s2r --help`` and friends parse and print only: no OpenCV, SciPy or Matplotlib (they exit via
+    SystemExit, caught here so the probe can list what was loaded)."""
+    code = ("from s2r.cli import main\nimport contextlib, io\nwith contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass")
+    assert _loaded_after(code) == []
+
+
 def test_parser_choices_match_the_library() -> None:
     from s2r.sources import CONVENTIONS, EXPORT_FORMATS
 
