@@ -131,3 +131,13 @@ def test_the_cli_skips_pydantic_plugin_scan_unless_the_user_set_it() -> None:
 
     assert probe() == ["'__all__'", "True"]
     assert probe(PYDANTIC_DISABLE_PLUGINS="") == ["''", "False"]  # the user's setting: plugins looked up
+
+
+def test_validation_without_a_report_does_not_load_matplotlib() -> None:
+    """The validation's own modules (and the command's module) leave matplotlib to the report writer: its
+    0.3-0.6 s of import ran before the renders could start. The report still gets it."""
+    probe = ("import sys\nimport s2r.validate, s2r.validate.run, s2r.validate.tasks, s2r.cli.validate_cmd\n"
+             "before = 'matplotlib' in sys.modules\nfrom s2r.validate import write_validation_report\n"
+             "print(before, 'matplotlib' in sys.modules, callable(write_validation_report))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "True", "True"]
