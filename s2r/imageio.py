@@ -128,12 +128,15 @@ def _grey_png_rows(data: bytes, chunks: Sequence[bytes]) -> NDArray[np.uint8] | 
 
     libpng's time goes to zlib's inflate (7 of 8 ms on a noisy image); ISA-L inflates the same stream 4x
     faster. Rows filtered None, Sub or Up (OpenCV's writer: Sub throughout) are undone with numpy (a running
-    sum mod 256 along the row or down the column). Anything else goes to libpng, which decides as before: an
-    interlaced image, Average or Paeth rows, another chunk, a critical chunk whose CRC does not match, a
-    stream that is damaged, cut short, or inflates to more or fewer bytes than the rows need."""
-    if _inflate is None or data[28] != 0 or not _SHORTCUT_CHUNKS.issuperset(chunks):
+    sum mod 256 along the row or down the column). Anything else goes to libpng, which decides as before: a
+    malformed or interlaced header, Average or Paeth rows, another chunk, a critical chunk whose CRC does not
+    match, a stream that is damaged, cut short, or inflates to more or fewer bytes than the rows need."""
+    if _inflate is None or data[8:12] != b"\x00\x00\x00\x0d" or data[26:29] != b"\x00\x00\x00" \
+            or not _SHORTCUT_CHUNKS.issuperset(chunks):  # IHDR of 13 bytes; deflate, adaptive filters, no interlace
         return None
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    if width == 0 or height == 0:
+        return None
     view, parts, pos = memoryview(data), [], 8
     while True:
         length, kind = _CHUNK_HEADER.unpack_from(data, pos)

@@ -160,3 +160,23 @@ def test_running_sums_are_exact_where_the_integral_image_would_pass_2_to_the_31(
     rows = np.full((9000, 1000), 255, np.uint8)
     rows[::7, ::3] = 1
     assert np.array_equal(_running_sums(rows), np.cumsum(rows, axis=1, dtype=np.uint8))
+
+
+def test_a_malformed_header_is_left_to_libpng() -> None:
+    """An IHDR of the wrong length, a zero side, or an unknown compression or filter method: libpng refuses
+    each, so the shortcut must not read pixels from them."""
+    img = _image(5)
+    good = _png(img, [1] * len(img))
+
+    def with_ihdr(payload: bytes) -> bytes:
+        ihdr = _chunk(b"IHDR", payload)
+        return good[:8] + ihdr + good[33:]
+
+    w, h = img.shape[1], img.shape[0]
+    for name, payload in {"zero width": struct.pack(">IIBBBBB", 0, h, 8, 0, 0, 0, 0),
+                          "compression 1": struct.pack(">IIBBBBB", w, h, 8, 0, 1, 0, 0),
+                          "filter method 1": struct.pack(">IIBBBBB", w, h, 8, 0, 0, 1, 0),
+                          "IHDR of 14 bytes": struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0) + b"\x00"}.items():
+        data = with_ihdr(payload)
+        assert _grey_png_rows(data, _png_chunks(data)[0]) is None, name
+    assert _grey_png_rows(good, _png_chunks(good)[0]) is not None
