@@ -149,12 +149,12 @@ def _grey_png_rows(data: bytes, chunks: Sequence[bytes]) -> NDArray[np.uint8] | 
         if kind == b"IEND":
             break
         pos = end + 4
-    stream = _inflate.decompressobj()
-    try:
-        raw = stream.decompress(b"".join(parts))
+    stream, size = _inflate.decompressobj(), height * (width + 1)
+    try:  # never more than the rows need, plus one byte to tell a stream that holds more (a bomb)
+        raw = stream.decompress(b"".join(parts), size + 1)
     except Exception:  # isal_zlib.error: a damaged stream (libpng then reports it)
         return None
-    if not stream.eof or stream.unused_data or len(raw) != height * (width + 1):
+    if not stream.eof or stream.unused_data or stream.unconsumed_tail or len(raw) != size:
         return None
     return _unfilter(np.frombuffer(raw, np.uint8).reshape(height, width + 1))
 

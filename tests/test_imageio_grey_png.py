@@ -180,3 +180,23 @@ def test_a_malformed_header_is_left_to_libpng() -> None:
         data = with_ihdr(payload)
         assert _grey_png_rows(data, _png_chunks(data)[0]) is None, name
     assert _grey_png_rows(good, _png_chunks(good)[0]) is not None
+
+
+def test_a_stream_inflating_past_the_rows_stops_at_them() -> None:
+    """A 60 kB stream of 60 MB (a deflate bomb behind a 50x40 header): inflated no further than the rows need
+    plus one byte, then left to libpng."""
+    import tracemalloc
+
+    img = _image(2, (40, 50))
+    good = _png(img, [1] * 40)
+    start = good.index(b"IDAT") - 4
+    length = struct.unpack(">I", good[start:start + 4])[0]
+    bomb = zlib.compress(b"\x01" + bytes(50) + b"\x00" * 60_000_000, 9)
+    data = good[:start] + _chunk(b"IDAT", bomb) + good[start + 12 + length:]
+    tracemalloc.start()
+    try:
+        assert _grey_png_rows(data, _png_chunks(data)[0]) is None
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 5_000_000
