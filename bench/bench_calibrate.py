@@ -46,6 +46,7 @@ shared, so the median of the repeats and the ratio of the medians are printed):
   calibrate`` console script (fresh output folder, so a fresh corner cache), start to exit, as a user times them.
 
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
+       .venv/bin/python bench/bench_calibrate.py --only-full --repeats 9   (the 40-pair first-run table only)
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.
 """
 
@@ -54,6 +55,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -195,14 +197,25 @@ def _linked_set(left: list[Path], right: list[Path], folder: Path) -> tuple[Path
     return folder / "left", folder / "right"
 
 
+#: CPU seconds (user + system, every process of the run) of each whole-process run: "pp" plain, "sp" s2r.
+_CPU: dict[str, list[float]] = {"pp": [], "sp": []}
+
+
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def plain_process(left: list[Path], right: list[Path]) -> tuple[float, int]:
     """The plain script as its own process: wall seconds from start to exit, pairs used."""
     with tempfile.TemporaryDirectory() as tmp:
         dl, dr = _linked_set(left, right, Path(tmp))
+        before = _children_cpu()
         t0 = time.perf_counter()
         out = subprocess.run([sys.executable, "-c", _PLAIN_SCRIPT, str(dl), str(dr)], capture_output=True, text=True,
                              env=child_environment(),
                              check=True)
+        _CPU["pp"].append(_children_cpu() - before)
         return time.perf_counter() - t0, int(out.stdout.split()[-1])
 
 
@@ -212,17 +225,20 @@ def s2r_process(left: list[Path], right: list[Path], jobs: int) -> tuple[float, 
     with tempfile.TemporaryDirectory() as tmp:
         _linked_set(left, right, Path(tmp))
         out = Path(tmp) / "out" / "rig.yaml"
+        before = _children_cpu()
         t0 = time.perf_counter()
         subprocess.run([str(script), "calibrate", tmp, "--pattern", "9x6", "--square", str(SQUARE), "-o", str(out),
                         "--jobs", str(jobs), "-q"], capture_output=True, text=True, check=True, env=child_environment())
         elapsed = time.perf_counter() - t0
+        _CPU["sp"].append(_children_cpu() - before)
         used = yaml.safe_load(out.read_text())["provenance"]["calibration"]["views_used"]
         return elapsed, int(used)
 
 
 def first_run_table(sets: dict[str, tuple[list[Path], list[Path]]], jobs: int, repeats: int) -> None:
     """Detection-only and whole-run times of plain and s2r, interleaved, ``repeats`` times per set."""
-    print(f"first run, median of {repeats} interleaved repeats (s2r jobs {jobs}); speed-up = plain / s2r")
+    print(f"first run, median of {repeats} interleaved repeats (s2r jobs {jobs}); speed-up = plain / s2r; "
+          f"1-min load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores before")
     print(f"{'set':<34} {'stage':<15} {'plain (1 proc)':>22} {'s2r':>22} {'speed-up':>9}  per repeat")
     for label, (left, right) in sets.items():
         paths = [p for pair in zip(left, right, strict=True) for p in pair]
@@ -241,6 +257,11 @@ def first_run_table(sets: dict[str, tuple[list[Path], list[Path]]], jobs: int, r
             each = " ".join(f"{a[0] / b[0]:.2f}" for a, b in zip(runs[pk], runs[sk], strict=True))
             print(f"{label:<34} {stage:<15} {tp:7.2f} s {runs[pk][0][1]:4d} {unit:<6} {ts:7.2f} s "
                   f"{runs[sk][0][1]:4d} {unit:<6} {tp / ts:7.2f}x  {each}")
+        cp, cs = float(np.median(_CPU["pp"])), float(np.median(_CPU["sp"]))
+        print(f"{label:<34} {'process CPU':<15} {cp:7.2f} s {'':11} {cs:7.2f} s {'':11} {cp / cs:7.2f}x  (user + "
+              f"system, all processes); load average after {os.getloadavg()[0]:.1f}")
+        _CPU["pp"].clear()
+        _CPU["sp"].clear()
 
 
 def s2r_detect(paths: list[Path], jobs: int) -> tuple[float, int]:
@@ -306,12 +327,18 @@ def main() -> None:
     parser.add_argument("--full-pairs", type=int, default=40, help="pairs of the set with a board in every view")
     parser.add_argument("--repeats", type=int, default=3, help="interleaved repeats of the first-run table")
     parser.add_argument("--only-first-run", action="store_true", help="print the first-run table only")
+    parser.add_argument("--only-full", action="store_true",
+                        help="only the first-run table of the set with a board in every view")
     args = parser.parse_args()
     truth = bench_rig()
-    left, right = dataset(args.pairs, args.blank)
     full_l, full_r = dataset(args.full_pairs, 0)
-    first_run_table({f"{args.pairs} pairs, {args.blank} without board": (left, right),
-                     f"{args.full_pairs} pairs, a board in every view": (full_l, full_r)}, args.jobs, args.repeats)
+    full = {f"{args.full_pairs} pairs, a board in every view": (full_l, full_r)}
+    if args.only_full:
+        first_run_table(full, args.jobs, args.repeats)
+        return
+    left, right = dataset(args.pairs, args.blank)
+    first_run_table({f"{args.pairs} pairs, {args.blank} without board": (left, right), **full}, args.jobs,
+                    args.repeats)
     if args.only_first_run:
         return
     print(f"{args.pairs} pairs 1280x720 ({args.blank} without a board), jobs={args.jobs}, {os.cpu_count()} cores; "

@@ -1,6 +1,12 @@
 """Time each stage of ``s2r validate`` (quick and default settings) and compare two of them with plain OpenCV.
 
     .venv/bin/python bench/bench_validate.py [--skip-full]
+    .venv/bin/python bench/bench_validate.py --process [--rounds 3] [--skip-full]
+
+``--process``: the installed ``s2r validate SIM REAL [--quick]`` as a user runs it, each a fresh process, the
+rounds interleaved (quick, default, quick, ...): median wall time, CPU time of the command and every process
+it started (user + system, less disturbed by other load than the wall clock), and the load average beside
+them. The issue's bars (idle 2-core machine): --quick <= 8 s, default <= 15 s.
 
 Prints the wall time of the whole run and the time of each stage per profile (render boards, calibrate,
 render scenes, depth pipeline), then, on the same rendered data, s2r's calibration and depth pipeline beside
@@ -13,6 +19,11 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
+import resource
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -96,10 +107,45 @@ def _depth_ratio(profile: StereoProfile) -> None:
           f"ratio {ours / plain:5.2f}")
 
 
+def _process_once(extra: list[str]) -> tuple[float, float]:
+    """Wall and CPU seconds (user + system, the command and its workers) of one ``s2r validate SIM REAL``."""
+    script = Path(sys.executable).with_name("s2r")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run([str(script), "validate", SIM, REAL, "-q", *extra], capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    if done.returncode not in (0, 1):  # 1: the two profiles differ (a finding), which they do
+        raise SystemExit(f"s2r validate failed ({done.returncode}): {done.stderr.strip()}")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def _process_table(rounds: int, skip_full: bool) -> None:
+    modes = {"--quick": ["--quick"]} if skip_full else {"--quick": ["--quick"], "default": []}
+    runs: dict[str, list[tuple[float, float]]] = {m: [] for m in modes}
+    loads = [os.getloadavg()[0]]
+    for _ in range(rounds):
+        for mode, extra in modes.items():
+            runs[mode].append(_process_once(extra))
+            loads.append(os.getloadavg()[0])
+    print(f"s2r validate {SIM} {REAL}, whole process, median of {rounds} interleaved rounds "
+          f"({os.cpu_count()} cores; 1-min load average {min(loads):.1f}-{max(loads):.1f} during the runs)")
+    for mode, values in runs.items():
+        wall = statistics.median(w for w, _ in values)
+        cpu = statistics.median(c for _, c in values)
+        each = " ".join(f"{w:.1f}" for w, _ in values)
+        print(f"  {mode:<8} wall {wall:6.1f} s   CPU {cpu:6.1f} s (all processes)   walls: {each}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-full", action="store_true", help="time only --quick settings")
+    parser.add_argument("--process", action="store_true", help="whole-process wall and CPU times only")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds of --process (default 3)")
     args = parser.parse_args()
+    if args.process:
+        _process_table(args.rounds, args.skip_full)
+        return
     logging.getLogger("s2r").setLevel(logging.ERROR)  # calibration coverage advice is not a benchmark figure
     _stage_table("--quick", QUICK)
     if not args.skip_full:

@@ -40,6 +40,15 @@ def test_profile_show_list_convert_load_no_heavy_library(tmp_path: Path) -> None
     assert out.is_file()
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["calibrate", "--help"], ["validate", "--help"]])
+def test_help_and_version_load_no_heavy_library(argv: list[str]) -> None:
+    """``s2r --help`` and friends parse and print only: no OpenCV, SciPy or Matplotlib (they exit via
+    SystemExit, caught here so the probe can list what was loaded)."""
+    code = ("from s2r.cli import main\nimport contextlib, io\nwith contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass")
+    assert _loaded_after(code) == []
+
+
 def test_parser_choices_match_the_library() -> None:
     from s2r.sources import CONVENTIONS, EXPORT_FORMATS
 
@@ -122,3 +131,13 @@ def test_the_cli_skips_pydantic_plugin_scan_unless_the_user_set_it() -> None:
 
     assert probe() == ["'__all__'", "True"]
     assert probe(PYDANTIC_DISABLE_PLUGINS="") == ["''", "False"]  # the user's setting: plugins looked up
+
+
+def test_validation_without_a_report_does_not_load_matplotlib() -> None:
+    """The validation's own modules (and the command's module) leave matplotlib to the report writer: its
+    0.3-0.6 s of import ran before the renders could start. The report still gets it."""
+    probe = ("import sys\nimport s2r.validate, s2r.validate.run, s2r.validate.tasks, s2r.cli.validate_cmd\n"
+             "before = 'matplotlib' in sys.modules\nfrom s2r.validate import write_validation_report\n"
+             "print(before, 'matplotlib' in sys.modules, callable(write_validation_report))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "True", "True"]

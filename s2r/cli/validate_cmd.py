@@ -78,7 +78,6 @@ def register(sub: Any) -> None:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from s2r.validate.report import write_validation_report
     from s2r.validate.run import FULL, QUICK, validate
     from s2r.validate.summary import summary_lines
     from s2r.validate.tolerances import load_tolerances
@@ -143,6 +142,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     else:
         print("\n".join(summary_lines(result)))
     if args.report:
+        from s2r.validate.report import write_validation_report  # here: matplotlib loads only for a report
+
         path = write_validation_report(result, args.report, force=True)
         print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
     return 0 if result.passed else 1

@@ -7,6 +7,7 @@ Inner corner (i, j) sits at ``(i * square_m, j * square_m, 0)``. Poses are ``T_l
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -70,27 +71,53 @@ class BoardGeometry:
         return x1 - x0, y1 - y0
 
     def corners(self) -> FloatArray:
-        """Inner corners ``(cols * rows, 3)`` in OpenCV's order (row by row), board frame, metres."""
-        cols, rows = self.pattern
-        j, i = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
-        return np.column_stack([i.ravel(), j.ravel(), np.zeros(i.size)]).astype(np.float64) * self.square_m
+        """Inner corners ``(cols * rows, 3)`` in OpenCV's order (row by row), board frame, metres (read-only:
+        made once per board, as the pose search asks for them thousands of times)."""
+        return _corners(self)
 
     def outline(self, per_edge: int = 8) -> FloatArray:
-        """Points ``(4 * per_edge, 3)`` along the board's outer edge, board frame, metres."""
-        x0, y0, x1, y1 = self.extent_m
-        t = np.linspace(0.0, 1.0, per_edge, endpoint=False)
-        xs = np.concatenate([x0 + (x1 - x0) * t, np.full_like(t, x1), x1 - (x1 - x0) * t, np.full_like(t, x0)])
-        ys = np.concatenate([np.full_like(t, y0), y0 + (y1 - y0) * t, np.full_like(t, y1), y1 - (y1 - y0) * t])
-        return np.column_stack([xs, ys, np.zeros_like(xs)])
+        """Points ``(4 * per_edge, 3)`` along the board's outer edge, board frame, metres (read-only)."""
+        return _outline(self, per_edge)
 
     def centre(self) -> FloatArray:
-        """Centre of the squares area in the board frame, metres."""
-        return np.array([(self.pattern[0] - 1) / 2.0, (self.pattern[1] - 1) / 2.0, 0.0]) * self.square_m
+        """Centre of the squares area in the board frame, metres (read-only)."""
+        return _centre(self)
+
+
+def _read_only(a: FloatArray) -> FloatArray:
+    a.setflags(write=False)
+    return a
+
+
+@functools.lru_cache(maxsize=16)
+def _corners(board: BoardGeometry) -> FloatArray:
+    cols, rows = board.pattern
+    j, i = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+    return _read_only(np.column_stack([i.ravel(), j.ravel(), np.zeros(i.size)]).astype(np.float64) * board.square_m)
+
+
+@functools.lru_cache(maxsize=16)
+def _outline(board: BoardGeometry, per_edge: int) -> FloatArray:
+    x0, y0, x1, y1 = board.extent_m
+    t = np.linspace(0.0, 1.0, per_edge, endpoint=False)
+    xs = np.concatenate([x0 + (x1 - x0) * t, np.full_like(t, x1), x1 - (x1 - x0) * t, np.full_like(t, x0)])
+    ys = np.concatenate([np.full_like(t, y0), y0 + (y1 - y0) * t, np.full_like(t, y1), y1 - (y1 - y0) * t])
+    return _read_only(np.column_stack([xs, ys, np.zeros_like(xs)]))
+
+
+@functools.lru_cache(maxsize=16)
+def _centre(board: BoardGeometry) -> FloatArray:
+    return _read_only(np.array([(board.pattern[0] - 1) / 2.0, (board.pattern[1] - 1) / 2.0, 0.0]) * board.square_m)
+
+
+@functools.lru_cache(maxsize=1)
+def _default_simulation() -> SimulationSettings:
+    return SimulationSettings()
 
 
 def clip_planes(profile: StereoProfile) -> tuple[float, float]:
     """``(near, far)`` clip planes in metres: the profile's simulation settings or the defaults."""
-    sim = profile.simulation if profile.simulation is not None else SimulationSettings()
+    sim = profile.simulation if profile.simulation is not None else _default_simulation()
     return sim.clip_near_m, sim.clip_far_m
 
 
@@ -213,8 +240,10 @@ def _region_score(profile: StereoProfile, board: BoardGeometry, T: FloatArray, s
         uv = project_points(cam, board.corners() @ (R @ T[:3, :3]).T + (R @ T[:3, 3] + t))
         inward = uv - _CELL_SAFETY_PX * np.array([sx, sy])  # count a cell only with a corner well inside it
         cell = np.floor((inward + 0.5) * np.array([gx / cam.width_px, gy / cam.height_px])).astype(int)
-        hit = {(int(a), int(b)) for a, b in cell if a in cols and b in rows}
-        share = min(share, len(hit) / (len(cols) * len(rows)))
+        inside = cell[(cell[:, 0] >= cols.start) & (cell[:, 0] < cols.stop) & (cell[:, 1] >= rows.start)
+                      & (cell[:, 1] < rows.stop)]
+        hit = np.unique(inside[:, 0] * gy + inside[:, 1]).size  # distinct cells reached
+        share = min(share, hit / (len(cols) * len(rows)))
         anchor = np.array([(sx + 1) / 2 * cam.width_px, (sy + 1) / 2 * cam.height_px])
         off = np.abs(uv - anchor) * np.array([gx / cam.width_px, gy / cam.height_px])
         worst = max(worst, float(np.min(np.max(off, axis=1))))

@@ -6,17 +6,22 @@ accuracy on rendered ground truth, the edits that make the sim match, a verdict 
     >>> result.passed, [c.text for c in result.failures]
 """
 
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from s2r.validate.advice import Edit, gazebo_hfov_rad, right_joint_origin, suggest_edits
 from s2r.validate.depth_accuracy import DEFAULT_BINS_M, BinStats, DepthAccuracy, measure_depth_accuracy
 from s2r.validate.params import ParamRow, parameter_table
 from s2r.validate.projection import ProjectionDiff, projection_difference
 from s2r.validate.recovery import RecoveryResult, RecoveryRow, compare_recovered, recover_calibration
-from s2r.validate.report import write_validation_report
 from s2r.validate.resolution import DepthResolution, depth_resolution
 from s2r.validate.run import FULL, QUICK, Settings, ValidationResult, check_distances, validate
 from s2r.validate.summary import summary_lines
 from s2r.validate.tolerances import Tolerances, load_tolerances
 from s2r.validate.verdict import Check
+
+if TYPE_CHECKING:
+    from s2r.validate.report import write_validation_report
 
 __all__ = [
     "DEFAULT_BINS_M",
@@ -49,3 +54,13 @@ __all__ = [
     "validate",
     "write_validation_report",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``write_validation_report`` on first use (PEP 562): it loads matplotlib (0.3-0.6 s of CPU), which a
+    validation without ``--report`` never needs."""
+    if name != "write_validation_report":
+        raise AttributeError(f"module 's2r.validate' has no attribute {name!r}")
+    value = importlib.import_module("s2r.validate.report").write_validation_report
+    globals()[name] = value
+    return value

@@ -12,6 +12,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+import numpy.ma  # np.median's first call loads it (10 ms): here, while the workers still detect
 from numpy.typing import NDArray
 
 from s2r.calib.detect import Detection
