@@ -118,13 +118,15 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
     """Gauss-Newton with Huber weights (re-scaled each iteration) on the right rows of (N, 2) matches.
 
     With ``nuisance`` the :func:`lens_nuisance` patterns are fitted too (their effect leaves ``omega``'s
-    covariance through the joint inverse).
+    covariance through the joint inverse). Matches the profile cannot project (a point behind a camera of a
+    strongly turned rectification) carry no weight; a system that cannot be solved gives NaN, never a guess.
     """
     disparity = left[:, 0] - right[:, 0] + rect.doffs_px
     extra = lens_nuisance(rect, left) if nuisance else np.zeros((len(left), 0))
     params = np.zeros(3 + extra.shape[1])
-    scale = robust_scale(right[:, 1] - left[:, 1])
+    nan = RotationFit(np.full(3, np.nan), np.full((3, 3), np.nan), float("nan"), model)
     A = np.zeros((len(params), len(params)))
+    scale = 1e-3
 
     def residual_of(p: FloatArray) -> FloatArray:
         predicted = predict_right(profile, rect, left, disparity, p[:3], model=model)[:, 1] + extra @ p[3:]
@@ -132,15 +134,25 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
 
     for _ in range(iterations):
         residual = residual_of(params)
-        scale = max(robust_scale(residual), 1e-3)
-        u = np.abs(residual) / (_HUBER_K * scale)
-        weights = np.where(u <= 1.0, 1.0, 1.0 / np.maximum(u, 1e-12))
-        weights[np.abs(residual) > 6.0 * scale] = 0.0  # gross mismatches carry no weight at all
         J = np.hstack([_jacobian(profile, rect, left, disparity, params[:3], model), extra])
+        usable = np.isfinite(residual) & np.isfinite(J).all(axis=1)
+        if usable.sum() < len(params) + 1:
+            return nan
+        residual, J = np.where(usable, residual, 0.0), np.where(usable[:, None], J, 0.0)
+        scale = max(robust_scale(residual[usable]), 1e-3)
+        u = np.abs(residual) / (_HUBER_K * scale)
+        weights = np.where(u <= 1.0, 1.0, 1.0 / np.maximum(u, 1e-12)) * usable
+        weights[np.abs(residual) > 6.0 * scale] = 0.0  # gross mismatches carry no weight at all
         A = J.T @ (J * weights[:, None])
-        step = np.linalg.lstsq(A, J.T @ (weights * residual), rcond=None)[0]
+        try:
+            step = np.linalg.lstsq(A, J.T @ (weights * residual), rcond=None)[0]
+        except np.linalg.LinAlgError:
+            return nan
         params = params + step
         if np.max(np.abs(step[:3])) < 1e-9:
             break
-    covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]  # A: the last iteration's
+    try:
+        covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]  # A: the last iteration's
+    except np.linalg.LinAlgError:
+        return nan
     return RotationFit(params[:3].copy(), covariance, scale, model)
