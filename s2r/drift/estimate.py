@@ -9,14 +9,17 @@ ways, all from the same frames:
   camera's centre; SIFT with the terms under the ``translation`` reading of the turn;
 - ORB matches (another detector), with and without the terms;
 
-and the reported rotation is the mean of the centre-model estimators. Sigma, per axis (radians):
-``sqrt(max(formal, jackknife)^2 + spread^2 + lens_floor^2)`` with ``spread`` the largest distance of any
-estimator from the reported value (so every estimator lies within one sigma), ``jackknife`` over frames (or image
-regions for fewer than four frames) and ``lens_floor`` the tangential-distortion uncertainty that reads as yaw.
+each with its own sigma (the larger of its residual covariance and its jackknife over frames, or image regions
+for fewer than four frames). The reported rotation is the inverse-variance mean of the centre-model estimators.
+Sigma, per axis (radians): ``sqrt(sigma_sift^2 + spread^2 + lens_floor^2)`` with ``sigma_sift`` the SIFT-with-
+lens-terms estimator's own, ``spread`` the largest distance of any estimator from the reported value beyond that
+estimator's own sigma (a disagreement its own noise does not explain), and ``lens_floor`` the tangential-
+distortion uncertainty that reads as yaw. Every estimator lies within ``sigma + its own sigma`` of the result.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,8 +76,8 @@ def lens_floor(profile: StereoProfile) -> FloatArray:
     return np.array([0.0, 2.0 * TANGENTIAL_SIGMA if distorted else 0.0, 0.0])
 
 
-def _jackknife(profile: StereoProfile, rect: StereoRectification, matches: MatchSet) -> FloatArray | None:
-    """Jackknife sigma (rad) of the SIFT-with-lens-terms fit over ``matches.groups``; None with under 3 groups."""
+def _jackknife(matches: MatchSet, fit: Callable[[FloatArray, FloatArray], FloatArray]) -> FloatArray | None:
+    """Jackknife sigma (rad) of ``fit(left, right) -> omega`` over ``matches.groups``; None with under 3 groups."""
     labels = np.unique(matches.groups)
     if len(labels) < 3:
         return None
@@ -82,7 +85,7 @@ def _jackknife(profile: StereoProfile, rect: StereoRectification, matches: Match
     for label in labels:
         keep = matches.groups != label
         if keep.sum() >= 10:
-            omega = fit_rotation(profile, rect, matches.left[keep], matches.right[keep], model="centre").omega
+            omega = fit(matches.left[keep], matches.right[keep])
             if np.all(np.isfinite(omega)):
                 estimates.append(omega)
     if len(estimates) < 3:
@@ -92,37 +95,60 @@ def _jackknife(profile: StereoProfile, rect: StereoRectification, matches: Match
     return np.asarray(np.sqrt((n - 1) / n * np.sum((values - values.mean(axis=0)) ** 2, axis=0)), np.float64)
 
 
+@dataclass(frozen=True)
+class _Fitted:
+    omega: FloatArray
+    formal: FloatArray
+    resampled: FloatArray | None
+
+    @property
+    def sigma(self) -> FloatArray:
+        return self.formal if self.resampled is None else np.fmax(self.formal, self.resampled)
+
+
+def _fitted(profile: StereoProfile, rect: StereoRectification, matches: MatchSet, *, model: str, nuisance: bool
+            ) -> _Fitted:
+    def fit(left: FloatArray, right: FloatArray) -> FloatArray:
+        return fit_rotation(profile, rect, left, right, model=model, nuisance=nuisance).omega
+
+    full = fit_rotation(profile, rect, matches.left, matches.right, model=model, nuisance=nuisance)
+    formal = np.sqrt(np.clip(np.diag(full.covariance), 0, None))
+    resampled = _jackknife(matches, fit) if np.all(np.isfinite(full.omega)) else None
+    return _Fitted(full.omega, formal, resampled)
+
+
 def _estimators(profile: StereoProfile, rect: StereoRectification, sift: MatchSet, orb: MatchSet | None,
-                min_matches: int) -> tuple[dict[str, FloatArray], FloatArray]:
-    """Every estimator's omega (rad) by name, and the formal sigma (rad) of the SIFT fit with the lens terms."""
-    main = fit_rotation(profile, rect, sift.left, sift.right, model="centre")
-    found = {"sift+lens": main.omega,
-             "sift": fit_rotation(profile, rect, sift.left, sift.right, model="centre", nuisance=False).omega,
-             "sift+lens translation": fit_rotation(profile, rect, sift.left, sift.right, model="translation").omega}
+                min_matches: int) -> dict[str, _Fitted]:
+    """Every estimator (omega, formal and jackknife sigma, rad) by name."""
+    found = {"sift+lens": _fitted(profile, rect, sift, model="centre", nuisance=True),
+             "sift": _fitted(profile, rect, sift, model="centre", nuisance=False),
+             "sift+lens translation": _fitted(profile, rect, sift, model="translation", nuisance=True)}
     if orb is not None and orb.count >= min_matches:
-        found["orb+lens"] = fit_rotation(profile, rect, orb.left, orb.right, model="centre").omega
-        found["orb"] = fit_rotation(profile, rect, orb.left, orb.right, model="centre", nuisance=False).omega
-    formal = np.sqrt(np.clip(np.diag(main.covariance), 0, None))
-    return {k: v for k, v in found.items() if np.all(np.isfinite(v))}, formal
+        found["orb+lens"] = _fitted(profile, rect, orb, model="centre", nuisance=True)
+        found["orb"] = _fitted(profile, rect, orb, model="centre", nuisance=False)
+    return {k: v for k, v in found.items() if np.all(np.isfinite(v.omega)) and np.all(np.isfinite(v.sigma))}
 
 
 def estimate_rotation(profile: StereoProfile, rect: StereoRectification, sift: MatchSet, orb: MatchSet | None, *,
                       min_matches: int) -> Estimate:
     """The rotation error (rad, about the right camera's axes) and its sigma from the matches (module docstring);
     NaN throughout when it cannot be estimated."""
-    estimators, formal = _estimators(profile, rect, sift, orb, min_matches)
-    centre = [v for k, v in estimators.items() if "translation" not in k]
-    if "sift+lens" not in estimators or not centre:
+    fitted = _estimators(profile, rect, sift, orb, min_matches)
+    if "sift+lens" not in fitted:
         nan = np.full(3, np.nan)
-        return Estimate(nan, nan, nan, None, nan, estimators, "not estimated")
-    omega = np.mean(centre, axis=0)
-    spread = np.max(np.abs(np.array(list(estimators.values())) - omega), axis=0)
-    resampled = _jackknife(profile, rect, sift)
-    statistical = np.fmax(formal, resampled) if resampled is not None else formal
+        return Estimate(nan, nan, nan, None, nan, {k: v.omega for k, v in fitted.items()}, "not estimated")
+    centre = [v for k, v in fitted.items() if "translation" not in k]
+    weights = np.array([1.0 / np.maximum(v.sigma, 1e-7) ** 2 for v in centre])
+    omega = np.sum(weights * np.array([v.omega for v in centre]), axis=0) / np.sum(weights, axis=0)
+    excess = np.array([np.fmax(np.abs(v.omega - omega) - v.sigma, 0.0) for v in fitted.values()])
+    spread = excess.max(axis=0)
+    main = fitted["sift+lens"]
     floor = lens_floor(profile)
-    sigma = np.sqrt(statistical**2 + spread**2 + floor**2)
-    parts = ["formal (residual-scaled)" if resampled is None or np.all(formal >= resampled) else "jackknife",
-             f"spread of {len(estimators)} estimators ({', '.join(estimators)})"]
+    sigma = np.sqrt(main.sigma**2 + spread**2 + floor**2)
+    parts = ["formal (residual-scaled)" if main.resampled is None or np.all(main.formal >= main.resampled)
+             else "jackknife",
+             f"spread of {len(fitted)} estimators beyond their own sigma ({', '.join(fitted)})"]
     if floor[1] > 0:
         parts.append("lens floor on yaw")
-    return Estimate(np.asarray(omega, np.float64), sigma, formal, resampled, spread, estimators, " + ".join(parts))
+    return Estimate(np.asarray(omega, np.float64), sigma, main.formal, main.resampled, spread,
+                    {k: v.omega for k, v in fitted.items()}, " + ".join(parts))

@@ -87,7 +87,8 @@ def test_identical_and_swapped_pairs_are_named_not_judged(capsys: pytest.Capture
     swapped = _write(tmp_path / "swapped", small_rig(), frames=1, swap=True)
     assert main(["check", str(base / "rig.yaml"), str(swapped), "--json"]) == 1
     result = json.loads(capsys.readouterr().out)
-    assert result["verdict"] == "cannot tell" and "look swapped" in result["reasons"][0]
+    assert result["verdict"] == "cannot tell" and "look exchanged" in result["reasons"][0]
+    assert result["swap"]["found"] == "exchanged" and result["rotation_error_deg"]["yaw"] is None
 
 
 def test_one_frame_is_enough_to_judge(capsys: pytest.CaptureFixture[str], base: Path, tmp_path: Path) -> None:
