@@ -6,8 +6,10 @@ a figure the recording could not give is left out (None), never guessed.
 
 Images (8-bit grey levels, "DN"; pixels of the camera's image):
 
-- ``image_noise_dn``: standard deviation of additive Gaussian noise, grey levels of the 8-bit range, with the
-  0.29 DN of rounding to integers taken out (the render rounds again).
+- ``image_noise_dn``: image noise, the one meaning shared with ``render --noise`` and ``sensor fit``: the standard
+  deviation of additive Gaussian noise in the GREY image the matcher and the fit read, grey levels of the 8-bit
+  range, before 8-bit rounding (the fit takes rounding's 0.29 DN out; the render rounds again). Rendered as one
+  plane shared by the colour channels, so a colour render's grey image carries it whole.
 - ``blur_sigma_px``: the edge-spread sigma, pixels: the standard deviation of the Gaussian whose integral best
   fits a sharp edge's grey-level profile across it. Rendering applies it as a Gaussian blur on top of the
   render's own (PyBullet, supersample 2: 0.15 px measured on its board edges, so an applied 0.7 px measures
