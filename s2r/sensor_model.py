@@ -21,7 +21,8 @@ baseline ``B``):
 - disparity noise ``sigma_d(Z) = subpixel_sigma_px + subpixel_growth_px_per_m * (Z - 1 m)`` pixels (at least 0);
 - ``disparity_step_px``: sub-pixel quantisation step of the matcher (D4xx: 1/32 px), None = none;
 - ``fill_rate_by_distance``: share of valid pixels on a surface at distance Z (linear between points, constant
-  beyond the ends);
+  beyond the ends); each point's ``frames`` is how many frames it rests on (``sensor fit`` merges a distance
+  bin of fewer than 3 frames with its neighbour, and flags a point that still rests on fewer);
 - ``hole_scale_px``: standard deviation of the Gaussian that correlates the hole pattern (0 = independent
   pixels);
 - ``edge_dropout_px``: width of the band without depth across a depth edge, pixels (both sides together).
@@ -47,6 +48,7 @@ class FillPoint(_Model):
 
     distance_m: StrictFloat = Field(gt=0)
     fill_rate_pct: StrictFloat = Field(ge=0, le=100)
+    frames: StrictInt | None = Field(default=None, ge=1)  # frames it rests on (None: not stated)
 
 
 class SensorModel(_Model):
