@@ -37,6 +37,11 @@ FloatArray = NDArray[np.float64]
 MODELS = ("centre", "translation")
 _EPS_RAD = 1e-5
 _HUBER_K = 1.5
+#: Prior sigmas of the lens nuisance terms (dimensionless, :func:`lens_nuisance`'s order): what a board calibration
+#: leaves uncertain between two cameras: focal ratio about 2e-3 (1 px at f 500), radial k1 about 5e-3, decentering
+#: p1 a few 1e-4 (REFERENCE.md). Fitted free, the terms trade against the rotation on real lenses: on OpenCV's
+#: webcam set ORB's matches moved yaw by 0.3 deg; this ridge keeps them to what a calibration can get wrong.
+LENS_PRIOR = np.array([2e-3, 5e-3, 2.5e-4])
 
 
 @dataclass(frozen=True)
@@ -117,9 +122,10 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
                  model: str, iterations: int = 8, nuisance: bool = True) -> RotationFit:
     """Gauss-Newton with Huber weights (re-scaled each iteration) on the right rows of (N, 2) matches.
 
-    With ``nuisance`` the :func:`lens_nuisance` patterns are fitted too (their effect leaves ``omega``'s
-    covariance through the joint inverse). Matches the profile cannot project (a point behind a camera of a
-    strongly turned rectification) carry no weight; a system that cannot be solved gives NaN, never a guess.
+    With ``nuisance`` the :func:`lens_nuisance` patterns are fitted too, each held near zero by a Gaussian prior
+    of :data:`LENS_PRIOR` (their effect leaves ``omega``'s covariance through the joint inverse). Matches the
+    profile cannot project (a point behind a camera of a strongly turned rectification) carry no weight; a
+    system that cannot be solved gives NaN, never a guess.
     """
     disparity = left[:, 0] - right[:, 0] + rect.doffs_px
     extra = lens_nuisance(rect, left) if nuisance else np.zeros((len(left), 0))
@@ -143,9 +149,10 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
         u = np.abs(residual) / (_HUBER_K * scale)
         weights = np.where(u <= 1.0, 1.0, 1.0 / np.maximum(u, 1e-12)) * usable
         weights[np.abs(residual) > 6.0 * scale] = 0.0  # gross mismatches carry no weight at all
-        A = J.T @ (J * weights[:, None])
+        prior = np.concatenate([np.zeros(3), scale**2 / LENS_PRIOR[:extra.shape[1]] ** 2])  # ridge on lens terms
+        A = J.T @ (J * weights[:, None]) + np.diag(prior)
         try:
-            step = np.linalg.lstsq(A, J.T @ (weights * residual), rcond=None)[0]
+            step = np.linalg.lstsq(A, J.T @ (weights * residual) - prior * params, rcond=None)[0]
         except np.linalg.LinAlgError:
             return nan
         params = params + step
