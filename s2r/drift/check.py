@@ -323,8 +323,9 @@ def summarise(given: StereoProfile, frames: Sequence[FrameMatches], *, settings:
     estimate, sift = _estimate(profile, rect, frames, settings, swap)
     left, right, n = sift.left, sift.right, sift.count
     omega_turned = estimate.omega
+    estimated = bool(n) and bool(np.all(np.isfinite(omega_turned)))
     residual = right[:, 1] - predict_right(profile, rect, left, left[:, 0] - right[:, 0] + rect.doffs_px,
-                                           omega_turned, model="centre")[:, 1] if n else np.zeros(0)
+                                           omega_turned, model="centre")[:, 1] if estimated else np.zeros(0)
     vertical, costs = _costs(profile, rect, omega_turned, estimate.sigma, settings.distances_m)
     reported = estimate if turn is None else _back(estimate, turn)
     verdict = _judge(profile, rect, reported, n, frames, settings, turn, swap)
@@ -337,7 +338,7 @@ def summarise(given: StereoProfile, frames: Sequence[FrameMatches], *, settings:
         sigma_source=reported.source, model_spread_deg=np.degrees(reported.spread),
         frames=[{"name": f.name, "matches": f.count, "keypoints": f.keypoints, "sharpness": f.sharpness}
                 for f in frames],
-        matches=n, residual_px=robust_scale(residual) if n else float("nan"), vertical_px=vertical,
+        matches=n, residual_px=robust_scale(residual) if estimated else float("nan"), vertical_px=vertical,
         region_map_px=_region_map(left, right[:, 1] - left[:, 1], rect.image_size) if n else [],
         depth_cost=costs, tolerance_deg=settings.tolerance_deg, image_size=rect.image_size,
         points={"left": left, "dy": right[:, 1] - left[:, 1]}, tolerance_px=settings.tolerance_px,

@@ -230,3 +230,41 @@ def test_a_mistyped_option_of_a_command_gets_did_you_mean(capsys: pytest.Capture
     with pytest.raises(SystemExit):
         main(["fleet", "check", "f.yaml", "-o", "o", "--schedular", "tcp://h:1"])
     assert "(did you mean --scheduler?)" in capsys.readouterr().err
+
+
+def test_big_images_are_checked_downscaled_in_bounded_memory(tmp_path: Path) -> None:
+    """Issue 37 class 1: a legal 8192^2 profile and one black 8192^2 pair (80 kB of PNG) took 15.6 GB; now one
+    warning line, a verdict, inside the 1 GB address-space cap and the timeout of the hostile suite."""
+    from tests.hostile._limits import run_s2r
+
+    dump_profile(make_rig(name="big", width=8192, height=8192, hfov_rad=1.0, baseline_m=0.1, origin="real"),
+                 tmp_path / "big.yaml")
+    for side in ("left", "right"):
+        (tmp_path / "rec" / side).mkdir(parents=True)
+        cv2.imwrite(str(tmp_path / "rec" / side / "00.png"), np.zeros((8192, 8192), np.uint8))
+    done = run_s2r("check", str(tmp_path / "big.yaml"), str(tmp_path / "rec"), timeout_s=60.0)
+    assert done.returncode == 1, done.stderr
+    assert "downscaled to 1145x1145 for feature detection" in done.stderr and "Traceback" not in done.stderr
+    assert "CANNOT TELL" in done.stdout
+
+
+def test_one_frame_and_a_diagonal_baseline_never_exit_3(capsys: pytest.CaptureFixture[str], base: Path,
+                                                        tmp_path: Path) -> None:
+    """Issue 37 classes 4 and 5: --max-frames 1 (ZeroDivisionError) and T = (-0.05, 0.05, 0) (LinAlgError)."""
+    assert main(["check", str(base / "rig.yaml"), str(base / "rec"), "--max-frames", "1", "--json"]) in (0, 1)
+    assert json.loads(capsys.readouterr().out)["verdict"] in ("good", "cannot tell")
+    diagonal = small_rig().model_copy(update={"extrinsics": small_rig().extrinsics.model_copy(update={
+        "rotation": ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)), "translation_m": (-0.05, 0.05, 0.0)})})
+    dump_profile(diagonal, tmp_path / "diagonal.yaml")
+    code = main(["check", str(tmp_path / "diagonal.yaml"), str(base / "rec"), "--json"])
+    captured = capsys.readouterr()
+    assert code in (1, 2) and "Traceback" not in captured.err and "internal error" not in captured.err
+    if code == 1:
+        assert json.loads(captured.out)["verdict"] == "cannot tell"
+
+
+def test_reversed_arguments_get_a_one_line_hint(capsys: pytest.CaptureFixture[str], base: Path) -> None:
+    """Issue 34: ``s2r check logs/run1 real.yaml``."""
+    assert main(["check", str(base / "rec"), str(base / "rig.yaml")]) == 2
+    err = _err(capsys)
+    assert "the arguments look reversed" in err and f"s2r check {base / 'rig.yaml'} {base / 'rec'}" in err
