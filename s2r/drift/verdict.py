@@ -63,8 +63,8 @@ def judge(omega_deg: FloatArray, sigma_deg: FloatArray, *, tolerance_deg: Sequen
     judged = [(a, t) for a, s, t in zip(AXES, sigma_deg, tol, strict=True) if s <= t / 2.0]
     rows = rows_px(omega_deg)
     reasons = [f"{', '.join(a for a, _ in judged)} within tolerance ({', '.join(f'{t:g}' for _, t in judged)} deg)",
-               f"rows agree within {tolerance_px:g} px (median {rows['median']:.2f}, p95 {rows['p95']:.2f} px)",
-               "decided by degrees and pixels"]
+               f"rows agree within {tolerance_px:g} px for the part of the rotation the data is sure of (p95 "
+               f"{sure['p95']:.2f} px; {rows['p95']:.2f} px at the estimate)", "decided by degrees and pixels"]
     if AXES[weak] in unresolved:  # yaw alone may stay unresolved: it is the p2 pattern of a real lens
         reasons.insert(1, f"{AXES[weak]} not resolved (sigma {sigma_deg[weak]:.3f} deg): on a lens with distortion "
                        "it looks like a tangential-distortion error, and estimators disagree; it scales depth, "
