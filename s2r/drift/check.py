@@ -202,9 +202,26 @@ def _working(profile: StereoProfile) -> tuple[StereoProfile, StereoRectification
     """The profile the check works with (a vertical rig turned on its side), its rectification and the turn."""
     rect = stereo_rectification(profile)
     if abs(rect.P2[1, 3]) <= abs(rect.P2[0, 3]):
+        _check_baseline(profile, rect)
         return profile, rect, None
     turn = side_by_side_turn(profile)  # OpenCV rectified it top-bottom: check it turned side by side
-    return turn.profile, stereo_rectification(turn.profile), turn
+    turned = stereo_rectification(turn.profile)
+    _check_baseline(profile, turned)
+    return turn.profile, turned, turn
+
+
+def _check_baseline(profile: StereoProfile, rect: StereoRectification) -> None:
+    """CheckError (one line, exit 2) when the rectified rig has no usable baseline: a diagonal one (as far
+    across as up, which neither a side-by-side nor a vertical rectification holds) or a right camera on the
+    left of the profile's own left one."""
+    if np.isfinite(rect.baseline_m) and rect.baseline_m > 1e-9 * max(profile.baseline_m, 1e-12):
+        return
+    x, y, z = (float(v) for v in -profile.R.T @ profile.T.reshape(3))
+    raise CheckError(f"the right camera sits at ({x:+.3f}, {y:+.3f}, {z:+.3f}) m in the left optical frame: no "
+                     "side-by-side or vertical rectification holds this baseline", path=profile.name,
+                     field="extrinsics.translation_m",
+                     hint="check the profile's T: a diagonal baseline is a calibration mistake; recalibrate "
+                     "with s2r calibrate")
 
 
 def _downscale_note(size: tuple[int, int]) -> str:
