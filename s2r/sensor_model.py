@@ -6,8 +6,10 @@ a figure the recording could not give is left out (None), never guessed.
 
 Images (8-bit grey levels, "DN"; pixels of the camera's image):
 
-- ``image_noise_dn``: standard deviation of additive Gaussian noise, grey levels of the 8-bit range, with the
-  0.29 DN of rounding to integers taken out (the render rounds again).
+- ``image_noise_dn``: image noise, the one meaning shared with ``render --noise`` and ``sensor fit``: the standard
+  deviation of additive Gaussian noise in the GREY image the matcher and the fit read, grey levels of the 8-bit
+  range, before 8-bit rounding (the fit takes rounding's 0.29 DN out; the render rounds again). Rendered as one
+  plane shared by the colour channels, so a colour render's grey image carries it whole.
 - ``blur_sigma_px``: the edge-spread sigma, pixels: the standard deviation of the Gaussian whose integral best
   fits a sharp edge's grey-level profile across it. Rendering applies it as a Gaussian blur on top of the
   render's own (PyBullet, supersample 2: 0.15 px measured on its board edges, so an applied 0.7 px measures
@@ -19,7 +21,8 @@ baseline ``B``):
 - disparity noise ``sigma_d(Z) = subpixel_sigma_px + subpixel_growth_px_per_m * (Z - 1 m)`` pixels (at least 0);
 - ``disparity_step_px``: sub-pixel quantisation step of the matcher (D4xx: 1/32 px), None = none;
 - ``fill_rate_by_distance``: share of valid pixels on a surface at distance Z (linear between points, constant
-  beyond the ends);
+  beyond the ends); each point's ``frames`` is how many frames it rests on (``sensor fit`` merges a distance
+  bin of fewer than 3 frames with its neighbour, and flags a point that still rests on fewer);
 - ``hole_scale_px``: standard deviation of the Gaussian that correlates the hole pattern (0 = independent
   pixels);
 - ``edge_dropout_px``: width of the band without depth across a depth edge, pixels (both sides together).
@@ -45,6 +48,7 @@ class FillPoint(_Model):
 
     distance_m: StrictFloat = Field(gt=0)
     fill_rate_pct: StrictFloat = Field(ge=0, le=100)
+    frames: StrictInt | None = Field(default=None, ge=1)  # frames it rests on (None: not stated)
 
 
 class SensorModel(_Model):

@@ -23,6 +23,8 @@ __all__ = ["register"]
 def _add_settings(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tolerance", type=float, default=0.05, metavar="DEG",
                         help="rotation drift tolerated per axis, degrees (default 0.05)")
+    parser.add_argument("--tolerance-px", type=float, default=0.5, metavar="PX",
+                        help="rows of mismatch tolerated, p95 over the image, pixels (default 0.5)")
     parser.add_argument("--max-frames", type=int, default=20, metavar="N",
                         help="pairs used, spread over the recording (default 20)")
 
@@ -74,7 +76,19 @@ def _settings(args: argparse.Namespace) -> Any:
                          hint="e.g. 0.05")
     if args.max_frames < 1:
         raise CheckError(f"must be at least 1, got {args.max_frames}", field="--max-frames", hint="e.g. 20")
-    return CheckSettings(tolerance_deg=(args.tolerance,) * 3)
+    if not 0.0 < args.tolerance_px <= 100.0:
+        raise CheckError(f"must be between 0 and 100 pixels, got {args.tolerance_px}", field="--tolerance-px",
+                         hint="e.g. 0.5")
+    return CheckSettings(tolerance_deg=(args.tolerance,) * 3, tolerance_px=args.tolerance_px)
+
+
+def _refuse_reversed(args: argparse.Namespace) -> None:
+    """``s2r check logs/run1 real.yaml``: a folder where the profile goes and a profile file where the recording
+    goes is the arguments the wrong way round."""
+    first, second = Path(args.profile), args.recording
+    if second is not None and first.is_dir() and second.suffix.lower() in (".yaml", ".yml") and second.is_file():
+        raise CheckError("the arguments look reversed: the profile comes first, then the recording",
+                         path=first, field="PROFILE", hint=f"s2r check {second} {first}")
 
 
 def _source(args: argparse.Namespace) -> Any:
@@ -89,12 +103,13 @@ def _source(args: argparse.Namespace) -> Any:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from s2r.drift.check import check_drift
+    from s2r.drift.check import run_check
     from s2r.drift.source import profile_sizes, read_pairs
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
     if args.fix != (args.output is not None):
         raise CheckError("--fix and -o go together", field="--fix", hint="pass --fix -o corrected.yaml")
+    _refuse_reversed(args)
     settings, source = _settings(args), _source(args)
     profile = load_profile(args.profile)
     if args.output is not None:
@@ -103,11 +118,13 @@ def _cmd_check(args: argparse.Namespace) -> int:
         prepare_output_dir(args.report, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))
     pairs = read_pairs(source, sizes=profile_sizes(profile))
-    result = check_drift(profile, pairs, settings=settings, progress=bar, total=source.max_frames)
+    checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames)
+    result = checked.result
+    steps = _next_steps(args, result)
     if args.json:
-        print_json(result.as_dict())
+        print_json({**result.as_dict(), "next_steps": steps})
     else:
-        print("\n".join(_summary(result)))
+        print("\n".join([*_summary(result), *(f"  next: {s}" for s in steps)]))
     if args.report is not None:
         from s2r.drift.report import check_report_html
 
@@ -115,20 +132,28 @@ def _cmd_check(args: argparse.Namespace) -> int:
                                  force=True)
         print(f"report: {path}", file=sys.stderr if args.json else sys.stdout)
     if args.fix:
-        _write_fix(args, profile, result, source.describe())
+        _write_fix(args, checked, settings, source.describe())
     return 0 if result.verdict == "good" else 1
 
 
-def _write_fix(args: argparse.Namespace, profile: Any, result: Any, source: str) -> None:
-    from s2r.drift.fix import corrected_profile
+def _next_steps(args: argparse.Namespace, result: Any) -> list[str]:
+    from s2r.drift.verdict import Verdict, next_steps
+
+    recording = str(args.recording) if args.recording is not None else "RECORDING"
+    verdict = Verdict(result.verdict, result.reasons, result.decided_by, result.unresolved)
+    return next_steps(verdict, profile=str(args.profile), recording=recording, swapped=result.swap is not None)
+
+
+def _write_fix(args: argparse.Namespace, checked: Any, settings: Any, source: str) -> None:
+    from s2r.drift.fix import plan_fix
     from s2r.formats.s2r_yaml import dump_profile
 
-    if result.verdict == "cannot tell":
-        raise CheckError("no correction written: the check cannot tell the rotation", field="--fix",
-                         hint="; ".join(result.reasons))
-    dump_profile(corrected_profile(profile, result, source=source), args.output, force=args.force)
-    print(f"wrote {args.output}: rotation corrected, intrinsics and baseline kept",
-          file=sys.stderr if args.json else sys.stdout)
+    fix = plan_fix(checked, settings=settings, source=source)
+    dump_profile(fix.profile, args.output, force=args.force)
+    out = sys.stderr if args.json else sys.stdout
+    for line in fix.lines():
+        print(line, file=out)
+    print(f"wrote {args.output}: rotation corrected, intrinsics and baseline kept", file=out)
 
 
 def _summary(result: Any) -> list[str]:
@@ -136,6 +161,7 @@ def _summary(result: Any) -> list[str]:
 
     lines = [f"{result.profile}: {result.verdict.upper()} - {'; '.join(result.reasons)}",
              f"  {result.matches} matches in {len(result.frames)} frames, robust residual {result.residual_px:.3f} px",
+             *([f"  {result.downscaled}"] if result.downscaled else []),
              "  rotation error of the right camera (deg, about its optical axes; R_true = dR R_profile):"]
     lines += [f"    {a:<6}{o:+.4f} +/- {s:.4f}  (tolerance {t:g})" if math.isfinite(o) else
               f"    {a:<6}not estimated  (tolerance {t:g})" for a, o, s, t in
@@ -143,7 +169,8 @@ def _summary(result: Any) -> list[str]:
     if not all(math.isfinite(o) for o in result.omega_deg):
         return [*lines, f"  {BLIND_SPOTS}"]
     v = result.vertical_px
-    lines.append(f"  rows of mismatch it leaves: median {v['median']:.2f} px, p95 {v['p95']:.2f} px")
+    lines.append(f"  rows of mismatch it leaves: median {v['median']:.2f} px, p95 {v['p95']:.2f} px "
+                 f"(tolerance {result.tolerance_px:g} px p95; {result.decided_by or 'not judged'})")
     lines.append("  depth bias at the centre (from yaw): " + ", ".join(
         f"{c['depth_error_pct']:+.2f} +/- {c['depth_error_sigma_pct']:.2f} % at {c['distance_m']:g} m"
         for c in result.depth_cost))

@@ -40,7 +40,8 @@ def _common(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> No
                         help="render at S x size and average down (default 2 with PyBullet, whose TinyRenderer has no "
                              "anti-aliasing; 1 with MuJoCo, whose filtered textures are as accurate at 1x)")
     parser.add_argument("--noise", type=float, default=0.0, metavar="SIGMA",
-                        help="Gaussian sensor noise in grey levels (default 0)")
+                        help="image noise: sigma of additive Gaussian noise in the grey image, grey levels of the "
+                        "8-bit range, before rounding (the sensor model's image_noise_dn; default 0)")
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
                         help="right camera gain relative to the left (default 1.0)")
     parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")

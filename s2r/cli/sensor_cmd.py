@@ -195,7 +195,10 @@ def _fit_lines(model: Any, notes: dict[str, str]) -> list[str]:
         lines.append(f"disparity noise    {model.subpixel_sigma_px:.3g} px at 1 m, "
                      f"{model.subpixel_growth_px_per_m:+.3g} px/m  ({notes.get('subpixel_sigma_px', '')})")
     for p in model.fill_rate_by_distance:
-        lines.append(f"fill rate          {p.fill_rate_pct:5.1f} % at {p.distance_m:.2f} m")
+        few = " (FEW FRAMES)" if p.frames is not None and p.frames < 3 else ""
+        lines.append(f"fill rate          {p.fill_rate_pct:5.1f} % at {p.distance_m:.2f} m, {p.frames} frames{few}")
+    if "fill_rate_by_distance" in notes and model.fill_rate_by_distance:
+        lines.append(f"                   ({notes['fill_rate_by_distance']})")
     if model.edge_dropout_px is not None or "edge_dropout_px" in notes:
         lines.append(f"edge dropout band  {fmt(model.edge_dropout_px, 'px')}; hole scale {model.hole_scale_px:.3g} px")
     return lines

@@ -37,6 +37,11 @@ FloatArray = NDArray[np.float64]
 MODELS = ("centre", "translation")
 _EPS_RAD = 1e-5
 _HUBER_K = 1.5
+#: Prior sigmas of the lens nuisance terms (dimensionless, :func:`lens_nuisance`'s order): what a board calibration
+#: leaves uncertain between two cameras: focal ratio about 2e-3 (1 px at f 500), radial k1 about 5e-3, decentering
+#: p1 a few 1e-4 (REFERENCE.md). Fitted free, the terms trade against the rotation on real lenses: on OpenCV's
+#: webcam set ORB's matches moved yaw by 0.3 deg; this ridge keeps them to what a calibration can get wrong.
+LENS_PRIOR = np.array([2e-3, 5e-3, 2.5e-4])
 
 
 @dataclass(frozen=True)
@@ -117,14 +122,17 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
                  model: str, iterations: int = 8, nuisance: bool = True) -> RotationFit:
     """Gauss-Newton with Huber weights (re-scaled each iteration) on the right rows of (N, 2) matches.
 
-    With ``nuisance`` the :func:`lens_nuisance` patterns are fitted too (their effect leaves ``omega``'s
-    covariance through the joint inverse).
+    With ``nuisance`` the :func:`lens_nuisance` patterns are fitted too, each held near zero by a Gaussian prior
+    of :data:`LENS_PRIOR` (their effect leaves ``omega``'s covariance through the joint inverse). Matches the
+    profile cannot project (a point behind a camera of a strongly turned rectification) carry no weight; a
+    system that cannot be solved gives NaN, never a guess.
     """
     disparity = left[:, 0] - right[:, 0] + rect.doffs_px
     extra = lens_nuisance(rect, left) if nuisance else np.zeros((len(left), 0))
     params = np.zeros(3 + extra.shape[1])
-    scale = robust_scale(right[:, 1] - left[:, 1])
+    nan = RotationFit(np.full(3, np.nan), np.full((3, 3), np.nan), float("nan"), model)
     A = np.zeros((len(params), len(params)))
+    scale = 1e-3
 
     def residual_of(p: FloatArray) -> FloatArray:
         predicted = predict_right(profile, rect, left, disparity, p[:3], model=model)[:, 1] + extra @ p[3:]
@@ -132,15 +140,26 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
 
     for _ in range(iterations):
         residual = residual_of(params)
-        scale = max(robust_scale(residual), 1e-3)
-        u = np.abs(residual) / (_HUBER_K * scale)
-        weights = np.where(u <= 1.0, 1.0, 1.0 / np.maximum(u, 1e-12))
-        weights[np.abs(residual) > 6.0 * scale] = 0.0  # gross mismatches carry no weight at all
         J = np.hstack([_jacobian(profile, rect, left, disparity, params[:3], model), extra])
-        A = J.T @ (J * weights[:, None])
-        step = np.linalg.lstsq(A, J.T @ (weights * residual), rcond=None)[0]
+        usable = np.isfinite(residual) & np.isfinite(J).all(axis=1)
+        if usable.sum() < len(params) + 1:
+            return nan
+        residual, J = np.where(usable, residual, 0.0), np.where(usable[:, None], J, 0.0)
+        scale = max(robust_scale(residual[usable]), 1e-3)
+        u = np.abs(residual) / (_HUBER_K * scale)
+        weights = np.where(u <= 1.0, 1.0, 1.0 / np.maximum(u, 1e-12)) * usable
+        weights[np.abs(residual) > 6.0 * scale] = 0.0  # gross mismatches carry no weight at all
+        prior = np.concatenate([np.zeros(3), scale**2 / LENS_PRIOR[:extra.shape[1]] ** 2])  # ridge on lens terms
+        A = J.T @ (J * weights[:, None]) + np.diag(prior)
+        try:
+            step = np.linalg.lstsq(A, J.T @ (weights * residual) - prior * params, rcond=None)[0]
+        except np.linalg.LinAlgError:
+            return nan
         params = params + step
         if np.max(np.abs(step[:3])) < 1e-9:
             break
-    covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]  # A: the last iteration's
+    try:
+        covariance = np.asarray(scale**2 * np.linalg.pinv(A), np.float64)[:3, :3]  # A: the last iteration's
+    except np.linalg.LinAlgError:
+        return nan
     return RotationFit(params[:3].copy(), covariance, scale, model)

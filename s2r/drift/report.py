@@ -51,9 +51,13 @@ def _sections(result: DriftResult, source: str) -> list[ReportSection]:
                     f"robust residual {result.residual_px:.3f} px.", BLIND_SPOTS])
     rows = [[a, f"{o:+.4f}", f"{s:.4f}", f"{t:g}"] for a, o, s, t in
             zip(AXES, result.omega_deg, result.sigma_deg, result.tolerance_deg, strict=True)]
+    estimators = [[name, *(f"{v:+.4f}" for v in values)] for name, values in result.estimators_deg.items()]
     rotation = ReportSection(
-        "Relative rotation error", paragraphs=[CONVENTION, f"sigma: {result.sigma_source}."],
-        tables=[html_table(["axis", "error (deg)", "sigma (deg)", "tolerance (deg)"], rows)],
+        "Relative rotation error", paragraphs=[CONVENTION, f"sigma: {result.sigma_source}.",
+                                               f"Verdict decided by: {result.decided_by or 'nothing judged'}."],
+        tables=[html_table(["axis", "error (deg)", "sigma (deg)", "tolerance (deg)"], rows),
+                html_table(["estimator", *(f"{a} (deg)" for a in AXES)], estimators,
+                           caption="Each estimator's rotation: sigma covers their disagreement")],
         images=[("vertical disparity of the matches", _figure(result))])
     cost_rows = [[f"{c['distance_m']:g}", f"{1000 * c['depth_error_m']:+.1f}", f"{c['depth_error_pct']:+.2f}",
                   f"{c['depth_error_sigma_pct']:.2f}"] for c in result.depth_cost]
@@ -61,8 +65,8 @@ def _sections(result: DriftResult, source: str) -> list[ReportSection]:
     cost = ReportSection(
         "What it costs", paragraphs=[
             f"Rows of mismatch the rotation leaves after rectification: median {vertical['median']:.2f} px, p95 "
-            f"{vertical['p95']:.2f} px, max {vertical['max']:.2f} px. SGBM searches one row: past about 0.5 px "
-            "matches fail or lock to the wrong texture."],
+            f"{vertical['p95']:.2f} px, max {vertical['max']:.2f} px (tolerance {result.tolerance_px:g} px p95). "
+            "SGBM searches one row: past about 0.5 px matches fail or lock to the wrong texture."],
         tables=[html_table(["distance (m)", "depth error (mm)", "depth error (%)", "sigma (%)"], cost_rows,
                            caption="Depth bias at the image centre from the yaw part of the error")])
     frames = ReportSection("Frames", collapsed=True, tables=[html_table(

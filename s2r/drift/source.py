@@ -52,6 +52,8 @@ def _spread(count: int, limit: int) -> list[int]:
     """``limit`` indices spread evenly over ``count`` items (all of them when there are fewer)."""
     if count <= limit:
         return list(range(count))
+    if limit == 1:
+        return [count // 2]
     return sorted({round(k * (count - 1) / (limit - 1)) for k in range(limit)})
 
 

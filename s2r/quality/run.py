@@ -11,7 +11,9 @@ Sources of depth, each in the pixel grid of the image the board is detected in:
 
 A frame is scored on its inliers (:func:`s2r.quality.metrics.frame_quality`) or listed as not scored with the
 reason: no board found, the board partly outside the matcher's depth range (stereo: the board's whole depth span
-must lie inside what the disparity range sees, or SGBM returns mismatches there), too few valid pixels, mismatches
+must lie inside what the disparity range sees, or SGBM returns mismatches there: a board nearer than the range is
+matched again with the range widened for that frame, said in its note with the range used, and refused only when no
+range the matcher supports reaches it), too few valid pixels, mismatches
 dominating, a figure that cannot be a measurement. The per-bin summary uses scored frames only.
 
 Temporal noise: frames whose board corners lie within ``REPEAT_PX`` (RMS) of an earlier frame's form one static
@@ -21,7 +23,7 @@ pose; each pose scored at least twice gives Intel's temporal noise on that pose'
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -38,7 +40,7 @@ from s2r.quality.summary import DEFAULT_BINS_M, BinQuality, datasheet_figures, s
 from s2r.quality.temporal import REPEAT_PX, StaticPoses
 
 __all__ = ["REPEAT_PX", "DepthView", "FrameImage", "QualityResult", "frame_image", "measure_board_views",
-           "measure_wall_views", "range_problem"]
+           "measure_wall_views", "range_problem", "widened_range"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -49,13 +51,19 @@ THUMB_WIDTH_PX = 320
 @dataclass(frozen=True)
 class DepthView:
     """One frame to score: its name, the 8-bit grey image the board is detected in (H, W), the depth in the same
-    pixel grid (H, W) float32 metres (NaN no data), that grid's intrinsics K (3x3 px) and distortion D."""
+    pixel grid (H, W) float32 metres (NaN no data), that grid's intrinsics K (3x3 px) and distortion D.
+
+    Stereo views also carry the matcher's ``disparity_range`` (min_disparity, num_disparities px) and ``rematch``,
+    which matches the same pair again with another num_disparities (a board nearer than the range sees is then
+    scored with a range widened for that frame)."""
 
     name: str
     grey: NDArray[np.uint8] | None
     depth_m: NDArray[np.float32]
     K: FloatArray
     D: FloatArray
+    disparity_range: tuple[int, int] | None = None
+    rematch: Callable[[int], DepthView] | None = None
 
 
 @dataclass(frozen=True)
@@ -171,6 +179,39 @@ def _log_not_scored(frames: Sequence[FrameQuality], source: str) -> None:
                     len(frames), ", ".join(f.image for f in skipped))
 
 
+def widened_range(view: DepthView, near_m: float, fb_px_m: float) -> int | None:
+    """The num_disparities (px, a multiple of 16) that sees down to ``near_m`` with a 5 % margin, or None when the
+    view cannot be matched again or no range the matcher supports (``min_disparity + num_disparities`` under the
+    image width) reaches it."""
+    if view.rematch is None or view.disparity_range is None or near_m <= 0:
+        return None
+    low, _ = view.disparity_range
+    need = max(16, int(np.ceil((fb_px_m / (0.95 * near_m) + 1 - low) / 16.0)) * 16)
+    return need if low + need < view.depth_m.shape[1] else None
+
+
+def _widened(view: DepthView, board: BoardView, pattern: tuple[int, int], fb: float,
+             span: tuple[float, float] | None, visible_m: tuple[float, float], problem: str
+             ) -> tuple[FrameQuality, NDArray[np.bool_]] | str:
+    """The frame scored again with a disparity range that sees the board's nearest part, or why it cannot be."""
+    assert view.disparity_range is not None and span is not None and view.rematch is not None
+    need = widened_range(view, span[0], fb)
+    if need is None:
+        low = view.disparity_range[0]
+        most = (view.depth_m.shape[1] - low - 1) // 16 * 16
+        return (f"{problem}; no range the matcher supports sees it (at most {most} px in a "
+                f"{view.depth_m.shape[1]} px wide image reaches {fb / max(low + most - 1, 1):.3f} m)")
+    again = view.rematch(need)
+    quality, mask, span_again = _score_board(again, board, pattern, fb)
+    near = fb / max(view.disparity_range[0] + need - 1, 1)
+    still = range_problem(span_again, (near, visible_m[1]), fb_px_m=fb)
+    if still:
+        return f"{problem}; widened to {need} px it is still outside: {still}"
+    note = (f"disparity range widened to {need} px for this frame (the board from {span[0]:.3f} m; the matcher's "
+            f"{view.disparity_range[1]} px sees from {visible_m[0]:.3f} m)")
+    return replace(quality, note="; ".join(filter(None, [quality.note, note]))), mask
+
+
 def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb: float,
                  visible_m: tuple[float, float] | None, poses: StaticPoses
                  ) -> tuple[FrameQuality, BoardView | None]:
@@ -180,6 +221,13 @@ def _board_frame(view: DepthView, pattern: tuple[int, int], square_m: float, fb:
                             not_scored=f"no {pattern[0]}x{pattern[1]} chessboard found"), None
     quality, mask, span = _score_board(view, board, pattern, fb)
     problem = range_problem(span, visible_m, fb_px_m=fb)
+    if problem and visible_m is not None and span is not None and span[0] < visible_m[0] \
+            and view.rematch is not None:
+        widened = _widened(view, board, pattern, fb, span, visible_m, problem)
+        if isinstance(widened, str):
+            problem = widened
+        else:
+            (quality, mask), problem = widened, ""
     if problem:
         quality = not_scored(quality, problem)
     group = poses.add(board.corners, mask, view.depth_m, quality.distance_m or board.plane.offset_m,

@@ -44,22 +44,46 @@ def _colour(path: Path) -> NDArray[np.uint8]:
     return np.asarray(image, np.uint8)
 
 
-def stereo_view(pipeline: StereoPipeline, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8]
-                ) -> DepthView:
+class _Widening:
+    """The pipeline with other disparity ranges (same profile, preset, rectification and post-processing), built
+    once per range."""
+
+    def __init__(self, pipeline: StereoPipeline) -> None:
+        self.base = pipeline
+        self.built: dict[int, StereoPipeline] = {}
+
+    def pipeline(self, num_disparities: int) -> StereoPipeline:
+        if num_disparities not in self.built:
+            p = self.base
+            self.built[num_disparities] = StereoPipeline(
+                p.profile, preset=p.preset, alpha=p.alpha, num_disparities=num_disparities,
+                postprocess=p.postprocess, resize=p.resize, fov_deg=p.fov_deg, rectified=p.rectified)
+        return self.built[num_disparities]
+
+
+def stereo_view(pipeline: StereoPipeline, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8], *,
+                widening: _Widening | None = None) -> DepthView:
     """One raw stereo pair through the pipeline: depth and grey image in the RECTIFIED left camera (no
-    distortion, intrinsics ``P1[:3, :3]``)."""
+    distortion, intrinsics ``P1[:3, :3]``); the view can be matched again with a wider disparity range."""
     result = pipeline.compute(left, right)
     geo = pipeline.geometry_for((left.shape[1], left.shape[0]))
     grey = result.rect_left if result.rect_left.ndim == 2 else cv2.cvtColor(result.rect_left, cv2.COLOR_BGR2GRAY)
     K = np.asarray(geo.rectification.P1[:3, :3], np.float64)
-    return DepthView(name, np.asarray(grey, np.uint8), result.depth, K, np.zeros(5))
+    widening = widening or _Widening(pipeline)
+
+    def rematch(num_disparities: int) -> DepthView:
+        return stereo_view(widening.pipeline(num_disparities), name, left, right, widening=widening)
+
+    return DepthView(name, np.asarray(grey, np.uint8), result.depth, K, np.zeros(5),
+                     disparity_range=(geo.config.min_disparity, geo.config.num_disparities), rematch=rematch)
 
 
 def stereo_views(pipeline: StereoPipeline, frames: Sequence[FramePaths]) -> Iterator[DepthView]:
     """Stereo pairs on disk through the pipeline (see :func:`stereo_view`), read one at a time."""
+    widening = _Widening(pipeline)
     for frame in frames:
         assert frame.right is not None
-        yield stereo_view(pipeline, frame.left.name, _colour(frame.left), _colour(frame.right))
+        yield stereo_view(pipeline, frame.left.name, _colour(frame.left), _colour(frame.right), widening=widening)
 
 
 def device_views(profile: StereoProfile, frames: Sequence[FramePaths], *,
@@ -82,9 +106,10 @@ def device_views(profile: StereoProfile, frames: Sequence[FramePaths], *,
 def bag_stereo_views(pipeline: StereoPipeline, bag: Path, left_topic: str, right_topic: str, *,
                      max_dt_s: float) -> Iterator[DepthView]:
     """Stereo pairs from a bag's left and right image topics through the pipeline (see :func:`stereo_view`)."""
+    widening = _Widening(pipeline)
     for name, (lm, lt), (rm, rt) in bag_pairs(bag, left_topic, right_topic, other_flag="--right-topic",
                                               max_dt_s=max_dt_s):
-        yield stereo_view(pipeline, name, decode_image(lm, lt), decode_image(rm, rt))
+        yield stereo_view(pipeline, name, decode_image(lm, lt), decode_image(rm, rt), widening=widening)
 
 
 def bag_device_views(profile: StereoProfile, bag: Path, left_topic: str, depth_topic: str, *, max_dt_s: float,

@@ -128,7 +128,8 @@ def render_board_set(
         square_m: square size in metres.
         seed: pose sampling and noise seed (same seed, same set).
         supersample: render at this factor and average down (TinyRenderer has no anti-aliasing).
-        noise_sigma: Gaussian sensor noise, grey levels.
+        noise_sigma: image noise, grey levels: sigma in the grey image before rounding (the one meaning:
+            :func:`s2r.render.rig.finish_image`).
         jobs: worker processes (default ``os.cpu_count()``; 1 renders in this process).
         force: reuse a non-empty ``out_dir`` (replaces the set's own numbered files).
         progress: ``callback(done, total, label)``.

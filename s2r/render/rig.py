@@ -84,16 +84,21 @@ class StereoJob:
 
 def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng: np.random.Generator,
                  sensor: SensorModel | None = None) -> NDArray[np.uint8]:
-    """RGB render to the BGR uint8 image a camera delivers: gain, the sensor model's blur and grey-level noise
-    (:func:`s2r.sensor.degrade_image`), Gaussian noise per channel (``noise_sigma`` grey levels), rounding.
+    """RGB render to the BGR uint8 image a camera delivers: gain, the sensor model's blur and image noise
+    (:func:`s2r.sensor.degrade_image`), ``noise_sigma`` more image noise, rounding.
 
-    Every renderer's images pass through here, so a sensor model applies to every backend alike."""
+    Image noise means one thing everywhere (``render --noise``, the sensor model's ``image_noise_dn`` and
+    ``sensor fit``): the sigma, in grey levels of the 8-bit range, of additive Gaussian noise in the GREY image the
+    matcher and the fit read, before 8-bit rounding. It is drawn as one plane shared by the colour channels, so the
+    grey conversion (weights summing to 1) carries it whole; ``noise_sigma`` and the model's noise are independent
+    and add in variance. Every renderer's images pass through here, so this applies to every backend alike."""
     bgr = np.ascontiguousarray(rgb[:, :, ::-1])
     if gain == 1.0 and noise_sigma == 0.0 and sensor is None:
         return bgr
     out = degrade_image(bgr.astype(np.float32) * np.float32(gain), sensor, rng)
     if noise_sigma > 0:
-        out += rng.normal(0.0, noise_sigma, size=out.shape).astype(np.float32)
+        plane = rng.normal(0.0, noise_sigma, size=out.shape[:2]).astype(np.float32)
+        out += plane[:, :, None] if out.ndim == 3 else plane
     return np.asarray(np.clip(np.round(out), 0, 255), dtype=np.uint8)
 
 

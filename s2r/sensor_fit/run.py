@@ -6,7 +6,9 @@ stereo pairs, from the pipeline's depth measured by :mod:`s2r.quality` (sub-pixe
 
 Across frames: sigma_d against distance is a least-squares line (a constant when the boards span under
 :data:`MIN_SPAN_M`), reported at 1 m with its slope; fill rate is averaged per distance bin
-(:data:`s2r.quality.DEFAULT_BINS_M`) at the bin's mean distance; the dropout band is the summed excess of
+(:data:`s2r.quality.DEFAULT_BINS_M`) at the bin's mean distance, a bin of fewer than :data:`MIN_FILL_FRAMES`
+frames merged with its nearer neighbour (one tilted frame is no fill cliff), and a point that still rests on
+fewer (too few frames in all) is flagged with its frame count; the dropout band is the summed excess of
 missing pixels over the summed edge length.
 """
 
@@ -35,6 +37,8 @@ __all__ = ["MIN_SPAN_M", "SensorFit", "board_image", "fit_device_depth", "fit_im
 
 #: Smallest spread of board distances (m) over which sigma_d's growth with distance is fitted.
 MIN_SPAN_M = 0.3
+#: Frames a fill point must rest on; a thinner distance bin is merged with its neighbour.
+MIN_FILL_FRAMES = 3
 #: Largest disparity noise (px) reported as noise; beyond it the residuals are mismatches (a pattern period off).
 _MAX_SIGMA_PX = 5.0
 
@@ -115,14 +119,34 @@ def _sigma_line(frames: Sequence[DepthFrame], *, linear: bool) -> tuple[float | 
     return max(float(intercept + slope), 0.0), float(slope)
 
 
-def _fill_curve(frames: Sequence[DepthFrame]) -> tuple[FillPoint, ...]:
-    out = []
-    for lo, hi in DEFAULT_BINS_M:
-        inside = [f for f in frames if lo <= f.distance_m < hi]
-        if inside:
-            out.append(FillPoint(distance_m=float(np.mean([f.distance_m for f in inside])),
-                                 fill_rate_pct=float(np.mean([f.fill_pct for f in inside]))))
-    return tuple(out)
+def _fill_groups(frames: Sequence[DepthFrame]) -> tuple[list[list[DepthFrame]], int]:
+    """The frames by distance bin, each bin of fewer than :data:`MIN_FILL_FRAMES` frames merged into its nearer
+    neighbour (by mean distance), and how many bins were merged."""
+    groups = [g for lo, hi in DEFAULT_BINS_M if (g := [f for f in frames if lo <= f.distance_m < hi])]
+    merged = 0
+    while len(groups) > 1 and min(len(g) for g in groups) < MIN_FILL_FRAMES:
+        i = min(range(len(groups)), key=lambda k: len(groups[k]))
+        mean = [float(np.mean([f.distance_m for f in g])) for g in groups]
+        sides = [j for j in (i - 1, i + 1) if 0 <= j < len(groups)]
+        j = min(sides, key=lambda k: abs(mean[k] - mean[i]))
+        groups[j] = sorted(groups[j] + groups[i], key=lambda f: f.distance_m)
+        del groups[i]
+        merged += 1
+    return groups, merged
+
+
+def _fill_curve(frames: Sequence[DepthFrame]) -> tuple[tuple[FillPoint, ...], str]:
+    """Fill points per distance bin (module docstring) and the note that says how they rest on frames."""
+    groups, merged = _fill_groups(frames)
+    points = tuple(FillPoint(distance_m=float(np.mean([f.distance_m for f in g])),
+                             fill_rate_pct=float(np.mean([f.fill_pct for f in g])), frames=len(g)) for g in groups)
+    thin = [p for p in points if p.frames is not None and p.frames < MIN_FILL_FRAMES]
+    note = f"{len(points)} point(s) from {len(frames)} frames"
+    if merged:
+        note += f"; {merged} bin(s) of fewer than {MIN_FILL_FRAMES} frames merged with their neighbours"
+    if thin:
+        note += "; FEW FRAMES: " + ", ".join(f"{p.distance_m:.2f} m rests on {p.frames}" for p in thin)
+    return points, note
 
 
 def _sigma_by_bin(frames: Sequence[DepthFrame]) -> list[dict[str, float]]:
@@ -165,8 +189,9 @@ def fit_model(images: Sequence[BoardImage], depth: Sequence[DepthFrame], *, sour
     if sigma is not None and sigma > _MAX_SIGMA_PX:  # mismatches, not noise: no figure rather than a false one
         notes["subpixel_sigma_px"] = f"{sigma:.3g} px measured: mismatches, not noise; left out"
         sigma, growth = None, 0.0
+    fill, notes["fill_rate_by_distance"] = _fill_curve(depth) if depth else ((), "no depth frames")
     model = SensorModel(image_noise_dn=noise, blur_sigma_px=blur, subpixel_sigma_px=sigma,
-                        subpixel_growth_px_per_m=growth, fill_rate_by_distance=_fill_curve(depth),
+                        subpixel_growth_px_per_m=growth, fill_rate_by_distance=fill,
                         hole_scale_px=holes or 0.0, edge_dropout_px=band, source=source,
                         frames=max(len(images), len(depth)))
     rows = [{"image": f.name, "distance_m": f.distance_m, "sigma_d_px": f.sigma_d_px, "fill_rate_pct": f.fill_pct}

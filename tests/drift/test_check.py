@@ -52,9 +52,12 @@ def test_a_turn_with_the_profiles_translation_kept_is_recovered_too(tmp_path: Pa
 
 @pytest.mark.slow
 def test_fix_writes_a_profile_that_then_passes(tmp_path: Path, drift_rig_file: Path,
-                                               recordings: dict[str, Path]) -> None:
+                                               recordings: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
     fixed = tmp_path / "fixed.yaml"
     assert main(["-q", "check", str(drift_rig_file), str(recordings["turned"]), "--fix", "-o", str(fixed)]) == 1
+    out = capsys.readouterr().out
+    assert "next: s2r check" in out and "--fix -o fixed.yaml" in out  # what to do after DRIFTED
+    assert "frames it did not fit" in out and ": GOOD," in out  # the written profile re-checked on held-out frames
     from s2r.registry import load_profile
 
     profile = load_profile(fixed)

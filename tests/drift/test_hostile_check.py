@@ -87,7 +87,8 @@ def test_identical_and_swapped_pairs_are_named_not_judged(capsys: pytest.Capture
     swapped = _write(tmp_path / "swapped", small_rig(), frames=1, swap=True)
     assert main(["check", str(base / "rig.yaml"), str(swapped), "--json"]) == 1
     result = json.loads(capsys.readouterr().out)
-    assert result["verdict"] == "cannot tell" and "look swapped" in result["reasons"][0]
+    assert result["verdict"] == "cannot tell" and "look exchanged" in result["reasons"][0]
+    assert result["swap"]["found"] == "exchanged" and result["rotation_error_deg"]["yaw"] is None
 
 
 def test_one_frame_is_enough_to_judge(capsys: pytest.CaptureFixture[str], base: Path, tmp_path: Path) -> None:
@@ -229,3 +230,39 @@ def test_a_mistyped_option_of_a_command_gets_did_you_mean(capsys: pytest.Capture
     with pytest.raises(SystemExit):
         main(["fleet", "check", "f.yaml", "-o", "o", "--schedular", "tcp://h:1"])
     assert "(did you mean --scheduler?)" in capsys.readouterr().err
+
+
+def test_big_images_are_checked_downscaled_in_bounded_memory(tmp_path: Path) -> None:
+    """Issue 37 class 1: a legal 8192^2 profile and one black 8192^2 pair (80 kB of PNG) took 15.6 GB; now one
+    warning line, a verdict, inside the 1 GB address-space cap and the timeout of the hostile suite."""
+    from tests.hostile._limits import run_s2r
+
+    dump_profile(make_rig(name="big", width=8192, height=8192, hfov_rad=1.0, baseline_m=0.1, origin="real"),
+                 tmp_path / "big.yaml")
+    for side in ("left", "right"):
+        (tmp_path / "rec" / side).mkdir(parents=True)
+        cv2.imwrite(str(tmp_path / "rec" / side / "00.png"), np.zeros((8192, 8192), np.uint8))
+    done = run_s2r("check", str(tmp_path / "big.yaml"), str(tmp_path / "rec"), timeout_s=60.0)
+    assert done.returncode == 1, done.stderr
+    assert "downscaled to 1145x1145 for feature detection" in done.stderr and "Traceback" not in done.stderr
+    assert "CANNOT TELL" in done.stdout
+
+
+def test_one_frame_and_a_diagonal_baseline_never_exit_3(capsys: pytest.CaptureFixture[str], base: Path,
+                                                        tmp_path: Path) -> None:
+    """Issue 37 classes 4 and 5: --max-frames 1 (ZeroDivisionError) and T = (-0.05, 0.05, 0) (LinAlgError)."""
+    assert main(["check", str(base / "rig.yaml"), str(base / "rec"), "--max-frames", "1", "--json"]) in (0, 1)
+    assert json.loads(capsys.readouterr().out)["verdict"] in ("good", "cannot tell")
+    diagonal = small_rig().model_copy(update={"extrinsics": small_rig().extrinsics.model_copy(update={
+        "rotation": ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)), "translation_m": (-0.05, 0.05, 0.0)})})
+    dump_profile(diagonal, tmp_path / "diagonal.yaml")
+    assert main(["check", str(tmp_path / "diagonal.yaml"), str(base / "rec"), "--json"]) == 2
+    err = _err(capsys)
+    assert "no side-by-side or vertical rectification holds this baseline" in err and "(+0.050, -0.050" in err
+
+
+def test_reversed_arguments_get_a_one_line_hint(capsys: pytest.CaptureFixture[str], base: Path) -> None:
+    """Issue 34: ``s2r check logs/run1 real.yaml``."""
+    assert main(["check", str(base / "rec"), str(base / "rig.yaml")]) == 2
+    err = _err(capsys)
+    assert "the arguments look reversed" in err and f"s2r check {base / 'rig.yaml'} {base / 'rec'}" in err
