@@ -295,12 +295,25 @@ def _print_summary(figures: dict[str, Any], out: Path) -> None:
         print("  held-out error by lens model: " + ", ".join(
             f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
             + " px (* used)")
+    _print_frames(figures.get("frames"))
     for d in figures["dropped"]:
+        if figures.get("frames") and "consecutive frame(s)" in d["reason"]:
+            continue  # a still board's run of frames: counted on the frames line
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
         print(f"  skipped {terminal_safe(d['name'])}{rms}: {terminal_safe(d['reason'])}")
     for g in figures.get("rejected_corner_groups") or []:
         print(f"  corners left out of {terminal_safe(g['name'])}: {g['left']} left, {g['right']} right "
               f"({terminal_safe(g['reason'])})")
+
+
+def _print_frames(frames: dict[str, Any] | None) -> None:
+    """A stream input's frame counts: read, used as views, and why the others were not kept."""
+    if not frames:
+        return
+    reasons = ", ".join(f"{n} {kind}" for kind, n in frames["not_kept"].items()) or "none"
+    print(f"  frames: {frames['read']} read, {frames['views_used']} used as views; not kept: {reasons} (repeat: a "
+          "still board, one view; blurred: variance of the Laplacian under the floor of 15 or under "
+          f"{frames['blur_ratio']:g} x the median of the frames before)")
 
 
 def _print_honest(figures: dict[str, Any]) -> None:
