@@ -45,7 +45,7 @@ def test_header_size_refused_before_decoding(tmp_path: Path) -> None:
     cv2.imwrite(str(folder / "left" / "01.png"), big)
     frames = open_recording(folder=folder, expected_size=(64, 48)).frames()
     next(frames)
-    with pytest.raises(RecordingError, match=r"01\.png: left image: the header declares 4000x4000 px but 64x48"):
+    with pytest.raises(RecordingError, match=r"01\.png: image size: left image: the header declares 4000x4000 px"):
         next(frames)
 
 
