@@ -67,16 +67,17 @@ def add_recording_arguments(parser: argparse.ArgumentParser, *, positional: str 
                        help=max_frames_help or "stop after N frames (default: all)")
 
 
-def spec_from_args(args: argparse.Namespace, *, positional: str = "recording", max_frames: bool = True
+def spec_from_args(args: argparse.Namespace, *, positional: str | None = "recording", max_frames: bool = True
                    ) -> RecordingSpec:
     """The :class:`~s2r.recordings.RecordingSpec` the arguments describe (not checked, nothing opened).
 
-    ``max_frames=False`` leaves ``--max-frames`` to the command (``check`` spreads its pairs instead).
+    ``positional``: the dest of the command's FOLDER argument (None: it has none). ``max_frames=False`` leaves
+    ``--max-frames`` to the command (``check`` spreads its pairs instead).
     """
     from s2r.recordings import RecordingSpec
 
-    def get(name: str) -> Any:
-        return getattr(args, name, None)
+    def get(name: str | None) -> Any:
+        return None if name is None else getattr(args, name, None)
 
     return RecordingSpec(folder=get(positional), left_glob=get("left"), right_glob=get("right"), bag=get("bag"),
                          left_topic=get("left_topic"), right_topic=get("right_topic"),
