@@ -29,3 +29,23 @@ def test_video_of_another_size_refused_before_decoding(tmp_path: Path) -> None:
     assert done.returncode == 2 and len(err) == 1, done.stderr
     assert err[0].startswith(f"error: {video}: --video (sbs): left image is 640x480 px but the profile's left "
                              "camera is 848x480")
+
+
+def test_bz2_chunk_declaring_2_gib_refused_before_inflating(tmp_path: Path) -> None:
+    """Issue 37 class 3 under the 1 GB cap: a bz2 chunk whose header states 2 GiB inflated is refused when the bag
+    opens (calibrate and check), nothing inflated."""
+    import struct
+
+    from tests.recordings.test_bag_chunks import _pairs
+
+    bag = write_bag(tmp_path / "bomb.bag", _pairs(), compression="bz2")
+    data = bytearray(bag.read_bytes())
+    pos = data.find(b"size=")
+    struct.pack_into("<I", data, pos + 5, 2 << 30)
+    bag.write_bytes(bytes(data))
+    for argv in (["calibrate", "--pattern", "9x6", "--square", "0.025", "-o", str(tmp_path / "x.yaml")],
+                 ["check", "realsense_d435_848x480"]):
+        done = run_s2r(*argv, "--bag", str(bag), "--left-topic", "/l", "--right-topic", "/r")
+        err = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(err) == 1, done.stderr
+        assert f"{bag}: a bz2 chunk at byte" in err[0] and f"declares {2 << 30} bytes inflated" in err[0]
