@@ -118,9 +118,6 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
         raise CalibrationError(f"must be in [0, 1), got {args.blur_ratio}", field="--blur-ratio", hint="e.g. 0.35")
     if args.max_error is not None and not 0 < args.max_error < float("inf"):
         raise CalibrationError("--max-error must be positive", field="--max-error", hint="e.g. --max-error 1.0")
-    if args.bag is not None and (args.left_topic is None or args.right_topic is None) and not args.mono:
-        raise CalibrationError("--bag needs --left-topic and --right-topic", field="--left-topic",
-                               hint="list the bag's topics with `rosbags-info BAG`")
     if not args.mono:
         spec_from_args(args, positional="input").check(error=CalibrationError)
     return pattern
@@ -190,6 +187,8 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
         kw = {k: v for k, v in common.items() if k not in ("square_m",)}
         kw.update(target=target, lens=lens,
                   distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
+    if spec.kind == "bag" and not _plain_bag(spec):
+        return _run_stream(args, spec, kw)  # a librealsense recording: its IR pair, found without topics
     if spec.kind == "bag":
         from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
@@ -221,6 +220,14 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
     return calibrate_detected_pairs(detection, fix_intrinsics=args.fix_intrinsics, **solve)
 
 
+def _plain_bag(spec: Any) -> bool:
+    """Whether the bag is read through rosbags by topic (not a librealsense recording)."""
+    from s2r.recordings import open_recording
+    from s2r.recordings.bagsource import BagFrames
+
+    return isinstance(open_recording(spec, error=CalibrationError), BagFrames)
+
+
 def _thinned(pairs: Any, args: argparse.Namespace) -> Any:
     """``pairs`` (a PairSet) with ``--every`` / ``--max-frames`` applied."""
     from dataclasses import replace
@@ -237,7 +244,7 @@ def _run_stream(args: argparse.Namespace, spec: Any, kw: dict[str, Any]) -> Any:
     from s2r.recordings import open_recording
 
     source = open_recording(spec, grey=True, error=CalibrationError)
-    files = [spec.video] if spec.kind == "video" else [spec.left_video, spec.right_video]
+    files = {"video": [spec.video], "bag": [spec.bag]}.get(spec.kind, [spec.left_video, spec.right_video])
     hashed = [SourceFile(path=str(f), sha256=sha256_file(f)) for f in files]
     return calibrate_stereo_stream(source, sources=hashed, blur_ratio=args.blur_ratio,
                                    fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)

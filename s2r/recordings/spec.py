@@ -6,7 +6,10 @@ Forms (exactly one):
   ``leftNN`` / ``rightNN`` files);
 - ``left_glob`` + ``right_glob``: two globs paired by the number in the names;
 - ``bag`` + ``left_topic`` + ``right_topic``: a ROS 1 ``.bag``, or a ROS 2 bag (sqlite3 or mcap) folder or file,
-  ``Image`` or ``CompressedImage`` topics paired by header stamp within ``max_dt_s``;
+  ``Image`` or ``CompressedImage`` topics paired by header stamp within ``max_dt_s``; a librealsense recording (a
+  bare sqlite3 ``.db3`` of librealsense 2.56+, or a RealSense Viewer ROS 1 ``.bag`` given without topics) needs no
+  topics: its Infrared 1 (left) and Infrared 2 (right) streams are found and paired by frame number
+  (:mod:`s2r.recordings.realsense`);
 - ``video`` + ``layout``: one video holding both images side by side (``sbs``) or top/bottom (``tb``);
 - ``left_video`` + ``right_video``: two videos paired by frame index.
 
@@ -67,7 +70,9 @@ class RecordingSpec:
         pairs = {"globs": (self.left_glob, self.right_glob, "--left and --right"),
                  "bag": (self.left_topic, self.right_topic, "--left-topic and --right-topic"),
                  "videos": (self.left_video, self.right_video, "--left-video and --right-video")}
-        if given[0] in pairs and (pairs[given[0]][0] is None or pairs[given[0]][1] is None):
+        one_topic = given[0] == "bag" and (self.left_topic is None) != (self.right_topic is None)
+        if (given[0] in pairs and given[0] != "bag" and (pairs[given[0]][0] is None or pairs[given[0]][1] is None)) \
+                or one_topic:
             raise error(f"{pairs[given[0]][2]} go together", field=pairs[given[0]][2].replace(" and ", "/"),
                         hint="pass both")
         if self.every < 1:
@@ -114,10 +119,12 @@ def open_recording(spec: RecordingSpec | None = None, *, expected_size: Expected
     spec.check(error=error)
     rule = SizeRule.of(expected_size, error=error)
     every, limit = spec.every, spec.max_frames
+    if spec.kind == "bag" and _realsense(Path(str(spec.bag)), topics=spec.left_topic is not None):
+        return _open_realsense(Path(str(spec.bag)), rule, every=every, max_frames=limit)
     if spec.kind == "bag":
         from s2r.recordings.bagsource import BagFrames
 
-        return BagFrames(Path(str(spec.bag)), str(spec.left_topic), str(spec.right_topic), rule=rule, grey=grey,
+        return BagFrames(Path(str(spec.bag)), spec.left_topic or "", spec.right_topic or "", rule=rule, grey=grey,
                          every=every, max_frames=limit, max_dt_s=spec.max_dt_s)
     if spec.kind == "video":
         from s2r.recordings.video import VideoFrames
@@ -132,3 +139,30 @@ def open_recording(spec: RecordingSpec | None = None, *, expected_size: Expected
 
     folder = None if spec.folder is None else Path(spec.folder)
     return FileFrames(folder, spec.left_glob, spec.right_glob, rule=rule, grey=grey, every=every, max_frames=limit)
+
+
+def _realsense(bag: Path, *, topics: bool) -> bool:
+    """Whether ``bag`` is read as a librealsense recording: a bare SQLite file (no ROS 2 bag folder around it), or
+    a ROS 1 bag given without topics."""
+    from s2r.formats.realsense_recording import BAG_MAGIC, SQLITE_MAGIC, file_head
+
+    if not bag.is_file() or (bag.parent / "metadata.yaml").is_file():
+        return False
+    try:
+        head = file_head(bag, 16)
+    except S2RError:
+        return False
+    return head.startswith(SQLITE_MAGIC) or (not topics and head.startswith(BAG_MAGIC))
+
+
+def _open_realsense(bag: Path, rule: SizeRule, *, every: int, max_frames: int | None) -> FrameSource:
+    """The IR pair of a librealsense recording, its camera_info sizes checked against ``rule`` before any frame."""
+    from s2r.formats.realsense_recording import LEFT_STREAM, RIGHT_STREAM
+    from s2r.recordings.realsense import RealSenseFrames
+
+    frames = RealSenseFrames(bag, every=every, max_frames=max_frames)
+    for side, stream in (("left", LEFT_STREAM), ("right", RIGHT_STREAM)):
+        intr = frames.topics.facts.stream(stream).intrinsic
+        if intr is not None:
+            rule.check(int(intr.width), int(intr.height), side, where=str(bag), field=f"{stream} camera_info")
+    return frames
