@@ -85,7 +85,9 @@ class StereoCalibration:
     skipped image or view with its reason; ``threshold_px`` the outlier threshold of the last round;
     coverage per camera; ``spread`` of the board poses (left camera); ``epipolar_rms_px`` the RMS of
     y differences of matching corners after rectification; ``corners_left/right`` the used views' corners;
-    ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report.
+    ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report; ``frames`` (stream
+    inputs: videos) the frames read, used as views and not kept by reason
+    (:func:`s2r.calib.solve.stereo_stream.frame_counts`).
     """
 
     profile: StereoProfile
