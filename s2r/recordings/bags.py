@@ -173,11 +173,13 @@ def paired_messages(reader: Any, left_topic: str, right_topic: str, *, max_dt_s:
 
 
 def grey_of(message: BagMessage, *, rule: SizeRule | None = None, side: str = "left",
-            error: type[S2RError] = CalibrationError) -> NDArray[np.uint8]:
-    """A message's image as 8-bit grey (H, W), its size checked by ``rule`` before decoding."""
+            error: type[S2RError] = CalibrationError, bag: Path | None = None) -> NDArray[np.uint8]:
+    """A message's image as 8-bit grey (H, W), its size checked by ``rule`` before decoding (an error names
+    ``bag``, the topic and the stamp)."""
     flag = "--left-topic" if side == "left" else "--right-topic"
+    where = f"{'' if bag is None else f'{bag} '}{message.topic} @ {message.stamp_ns} ns"
     image = image_from_message(message.msg, message.msgtype, error=error, topic=flag, rule=rule, side=side,
-                               where=f"{message.topic} @ {message.stamp_ns} ns")
+                               where=where)
     return to_uint8(image, grey=True)
 
 

@@ -63,9 +63,9 @@ class BagFrames:
 
     def _image(self, message: BagMessage, side: str) -> Any:
         if self.grey:
-            return grey_of(message, rule=self.rule, side=side, error=self.rule.error)
+            return grey_of(message, rule=self.rule, side=side, error=self.rule.error, bag=self.bag)
         image = image_from_message(message.msg, message.msgtype, error=self.rule.error, rule=self.rule, side=side,
-                                   topic=f"--{side}-topic", where=f"{message.topic} @ {message.stamp_ns} ns")
+                                   topic=f"--{side}-topic", where=f"{self.bag} {message.topic} @ {message.stamp_ns} ns")
         return to_uint8(image, grey=False)
 
     def messages(self) -> Iterator[tuple[int, BagMessage, BagMessage]]:

@@ -19,7 +19,8 @@ def test_check_bag_of_8192px_frames_refused_at_the_first_header(tmp_path: Path) 
     done = run_s2r("check", "realsense_d435_848x480", "--bag", str(bag), "--left-topic", "/l", "--right-topic", "/r")
     err = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(err) == 1, done.stderr
-    assert "left image is 8192x8192 px but the profile's left camera is 848x480" in err[0]
+    assert err[0].startswith(f"error: {bag} /l @ 1000000000 ns: image size: left image is 8192x8192 px but the "
+                             "profile's left camera is 848x480")
 
 
 def test_video_of_another_size_refused_before_decoding(tmp_path: Path) -> None:

@@ -38,8 +38,8 @@ def _assert_within_sigma(result: Any, reference: Any) -> None:
     got, ref = result.figures(), reference.figures()
     for side in ("left", "right"):
         for name in ("fx_px", "fy_px", "cx_px", "cy_px"):
-            assert abs(got[side][name] - ref[side][name]) < ref[side]["std"][name], (side, name)
-    assert abs(got["baseline_m"] - ref["baseline_m"]) < ref["baseline_std_m"]
+            assert abs(got[side][name] - ref[side][name]) < 0.25 * ref[side]["std"][name], (side, name)  # 0.07 seen
+    assert abs(got["baseline_m"] - ref["baseline_m"]) < 0.25 * ref["baseline_std_m"]
     frames = result.frames
     assert frames["read"] == 13 * HOLD + 1 and frames["views_used"] == 13
     assert frames["not_kept"] == {"blurred": 1, "repeat": 13 * (HOLD - 1)}

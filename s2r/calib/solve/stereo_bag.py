@@ -60,7 +60,8 @@ def calibrate_stereo_bag(
 
     def items() -> Iterator[DetectItem]:
         for i, (_index, ml, mr) in enumerate(frames.messages()):
-            fl, fr = grey_of(ml, error=CalibrationError), grey_of(mr, side="right", error=CalibrationError)
+            fl = grey_of(ml, error=CalibrationError, bag=bag)
+            fr = grey_of(mr, side="right", error=CalibrationError, bag=bag)
             label = f"pair{i:05d}@{ml.stamp_ns * 1e-9:.3f}s"
             names.append(label)
             if len(samples) < _SAMPLES:
