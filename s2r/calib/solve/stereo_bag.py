@@ -28,6 +28,9 @@ from s2r.targets import AnyTarget
 __all__ = ["calibrate_stereo_bag"]
 
 _SAMPLES = 16
+#: Bytes of sample images kept for the report (the first pairs, at least one): 16 pairs of 8192x8192 px would
+#: hold 2 GiB while the stream is detected.
+_SAMPLE_BYTES = 64 << 20
 
 
 def _bag_sources(bag: Path) -> list[SourceFile]:
@@ -64,7 +67,7 @@ def calibrate_stereo_bag(
             fr = grey_of(mr, side="right", error=CalibrationError, bag=bag)
             label = f"pair{i:05d}@{ml.stamp_ns * 1e-9:.3f}s"
             names.append(label)
-            if len(samples) < _SAMPLES:
+            if len(samples) < _SAMPLES and (not samples or (len(samples) + 1) * 2 * fl.nbytes <= _SAMPLE_BYTES):
                 samples[label] = (fl, fr)
             yield DetectItem(name=f"{left_topic}@{ml.stamp_ns * 1e-9:.3f}", sha256=ml.sha256, source=fl)
             yield DetectItem(name=f"{right_topic}@{mr.stamp_ns * 1e-9:.3f}", sha256=mr.sha256, source=fr)

@@ -36,6 +36,9 @@ __all__ = ["calibrate_stereo_stream"]
 
 Pair = tuple[str, Detection, Detection]
 _SAMPLES = 16
+#: Bytes of sample images kept for the report (the first pairs, at least one): 16 pairs of 8192x8192 px would
+#: hold 2 GiB while the stream is detected.
+_SAMPLE_BYTES = 64 << 20
 _RUN = "consecutive frame(s)"
 
 
@@ -123,7 +126,7 @@ def calibrate_stereo_stream(
                 blurred.append(DroppedView(name=frame.name, reason=why))
                 continue
             names.append(frame.name)
-            if len(samples) < _SAMPLES:
+            if len(samples) < _SAMPLES and (not samples or (len(samples) + 1) * 2 * frame.left.nbytes <= _SAMPLE_BYTES):
                 samples[frame.name] = (frame.left, frame.right)
             yield DetectItem(name=f"{frame.name} left", sha256=_sha(frame.left), source=frame.left)
             yield DetectItem(name=f"{frame.name} right", sha256=_sha(frame.right), source=frame.right)
