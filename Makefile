@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.s2r-installed
 BYTECODE := $(VENV)/.s2r-bytecode
 
-.PHONY: lock test demo lint typecheck pytest test-browser test-ros bench profiles calibration-sample clean
+.PHONY: lock test demo lint typecheck pytest test-browser test-recordings test-ros bench profiles calibration-sample clean
 
 # Installs the tested versions: requirements.lock pins every package (pyproject.toml keeps ranges for users who
 # `pip install s2r`). `make lock` refreshes it from today's releases; commit it only after `make test` is green.
@@ -56,6 +56,13 @@ clean:
 test-browser: $(STAMP)
 	@if [ ! -x /usr/bin/chromium ]; then apt-get update && apt-get install -y chromium; fi
 	$(BIN)/pytest -q -m browser tests/validate
+
+# The recording inputs with H.264 videos: Debian's ffmpeg makes the test files (installed when missing, as root);
+# without it those tests skip with the reason in `make pytest`.
+test-recordings: $(STAMP) $(BYTECODE)
+	@if ! command -v ffmpeg >/dev/null; then apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y \
+		--no-install-recommends ffmpeg; fi
+	$(BIN)/pytest -q -n 0 tests/recordings
 
 # ROS's own consumers (Debian's ROS 1) on s2r's outputs, on a loopback-only roscore: installs what is missing (as
 # root), then runs the tests marked ros. The -dev packages and libnodeletlib-tools carry the nodelet plugin

@@ -10,7 +10,6 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 import numpy as np
@@ -127,16 +126,15 @@ def add_json(parser: argparse.ArgumentParser) -> None:
 
 
 def add_recording_inputs(parser: argparse.ArgumentParser) -> None:
-    """Add the options a recording is given by (``depth-quality``, ``sensor fit``): folders or globs of left,
-    right or device-depth images, or a ROS bag with its topics and pairing tolerance."""
-    parser.add_argument("--left", metavar="DIR|GLOB", help="left images (folder or quoted glob)")
-    parser.add_argument("--right", metavar="DIR|GLOB", help="right images: stereo pairs, depth through the pipeline")
+    """Add the options a recording is given by (``depth-quality``, ``sensor fit``): the shared recording inputs
+    (:func:`s2r.cli._recording.add_recording_arguments`: folders, globs, bags, videos) plus device depth images or
+    a bag's depth topic registered to the left images."""
+    from s2r.cli._recording import add_recording_arguments
+
+    add_recording_arguments(parser, what="stereo pairs (or --left with --depth / --bag with --depth-topic: device "
+                                         "depth)")
     parser.add_argument("--depth", metavar="DIR|GLOB", help="device depth images registered to the left images")
-    parser.add_argument("--bag", type=Path, help="ROS bag (ROS 1 file or ROS 2 folder) instead of folders")
-    parser.add_argument("--left-topic", help="left image topic in --bag")
-    parser.add_argument("--right-topic", help="right image topic in --bag")
     parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
-    parser.add_argument("--max-dt", type=float, default=0.01, help="bag pairing tolerance, seconds (default 0.01)")
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:

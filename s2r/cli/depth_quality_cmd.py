@@ -42,7 +42,8 @@ def register(sub: Any) -> None:
         "depth-quality", help="Intel's depth-quality metrics of a recording (board or flat wall)",
         description="Z accuracy, plane-fit RMS, sub-pixel RMS, fill rate (and temporal noise when a pose repeats) "
         "inside a chessboard's region, against the board's PnP plane, per frame and per distance bin, as Intel's "
-        "camera depth testing methodology defines them. Depth from stereo pairs through the pipeline (--right) or "
+        "camera depth testing methodology defines them. Depth from stereo pairs through the pipeline (any "
+        "recording: a folder, --left/--right, --bag with --right-topic, --video, --left-video/--right-video) or "
         "from the device (--depth: uint16 mm PNG, 0 = no data, or float32 metres .npy, registered to the left "
         "image). --wall: a flat wall without a board (central ROI; refused when it is not a plane). Mismatched "
         "pixels are counted (outliers %) and left out of the RMS figures; a frame that cannot be scored says why.")
@@ -63,28 +64,49 @@ def register(sub: Any) -> None:
     parser.set_defaults(func=_cmd_depth_quality)
 
 
+def _device(args: argparse.Namespace) -> bool:
+    return args.depth is not None or args.depth_topic is not None
+
+
 def _source(args: argparse.Namespace) -> RecordingSource:
-    """The recording named by the options (checked by :func:`_check_args`)."""
+    """The recording named by the options (checked by :func:`_check_args`): stereo pairs from any recording form,
+    or left images with device depth."""
+    from s2r.cli._recording import spec_from_args
     from s2r.quality.source import RecordingSource
 
-    return RecordingSource(left=args.left, right=args.right, depth=args.depth,
-                           bag=None if args.bag is None else str(args.bag), left_topic=args.left_topic,
-                           right_topic=args.right_topic, depth_topic=args.depth_topic, max_dt_s=args.max_dt,
+    if not _device(args):
+        return RecordingSource(recording=spec_from_args(args), depth_scale_m=args.depth_scale)
+    return RecordingSource(left=args.left, depth=args.depth, bag=None if args.bag is None else str(args.bag),
+                           left_topic=args.left_topic, depth_topic=args.depth_topic, max_dt_s=args.max_dt,
                            depth_scale_m=args.depth_scale)
 
 
-def _check_args(args: argparse.Namespace) -> None:
-    stereo = args.right is not None or args.right_topic is not None
-    device = args.depth is not None or args.depth_topic is not None
-    if stereo == device:
-        raise DepthError("give exactly one depth source", field="--right/--depth",
-                         hint="--right DIR (stereo through the pipeline) or --depth DIR (device depth)")
-    if args.bag is None and (args.left_topic or args.right_topic or args.depth_topic):
+def _check_device(args: argparse.Namespace) -> None:
+    """Device depth: left images + --depth, or --bag with --left-topic + --depth-topic; no stereo form beside it."""
+    others = [flag for flag, value in (("--right", args.right), ("--right-topic", args.right_topic),
+                                       ("--video", args.video), ("--left-video", args.left_video),
+                                       ("--right-video", args.right_video), ("FOLDER", args.recording)) if value]
+    if others:
+        raise DepthError("give exactly one depth source", field="--depth/" + others[0],
+                         hint="stereo pairs (a recording) or device depth (--depth / --depth-topic), not both")
+    if args.bag is None and (args.left_topic or args.depth_topic):
         raise DepthError("topics need --bag", field="--left-topic", hint="pass --bag BAG")
     if args.bag is not None and not args.left_topic:
         raise DepthError("a bag needs --left-topic", field="--left-topic", hint="e.g. /camera/infra1/image_rect_raw")
-    if args.bag is None and args.left is None and not (args.wall and device):
+    if args.bag is None and args.left is None and not args.wall:
         raise DepthError("missing left images", field="--left", hint="pass --left DIR|GLOB")
+
+
+def _check_args(args: argparse.Namespace) -> None:
+    if _device(args):
+        _check_device(args)
+    elif args.left is not None and args.right is None:
+        raise DepthError("give exactly one depth source", field="--right/--depth",
+                         hint="--right DIR|GLOB (stereo through the pipeline) or --depth DIR|GLOB (device depth)")
+    else:
+        from s2r.cli._recording import spec_from_args
+
+        spec_from_args(args).check(error=DepthError)
     if not args.wall and (args.pattern is None or args.square is None):
         raise DepthError("board mode needs the board", field="--pattern/--square",
                          hint="pass --pattern COLSxROWS (inner corners) and --square METRES, or --wall")

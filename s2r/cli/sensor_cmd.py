@@ -43,7 +43,8 @@ def register(sub: Any) -> None:
         description="Measures a sensor model on a chessboard recording (the inputs depth-quality takes): image "
         "noise (grey levels) and blur (px) from the raw images, and from device depth (--depth) the disparity "
         "noise sigma_d (px) against distance, the fill rate against distance and the dropout band at depth edges; "
-        "from stereo pairs (--right) the pipeline's sub-pixel RMS and fill rate. Writes sensor.yaml.")
+        "from stereo pairs (any recording: a folder, --left/--right, --bag, --video, --left-video/--right-video) "
+        "the pipeline's sub-pixel RMS and fill rate. Writes sensor.yaml.")
     add_profile_positional(fit, help="the recording camera's profile (name or YAML path)")
     add_recording_inputs(fit)
     fit.add_argument("--preset", default="profile", choices=PRESETS,
@@ -74,19 +75,32 @@ def register(sub: Any) -> None:
     apply.set_defaults(func=_cmd_apply)
 
 
+def _stereo(args: argparse.Namespace) -> bool:
+    """Whether the options name stereo pairs (any recording form beyond ``--left`` alone)."""
+    return any(v is not None for v in (args.right, args.right_topic, args.recording, args.video, args.left_video,
+                                       args.right_video))
+
+
 def _check_fit_args(args: argparse.Namespace) -> None:
-    if args.bag is None and args.left is None:
-        raise DepthError("missing left images", field="--left", hint="pass --left DIR|GLOB (or --bag)")
-    if args.bag is not None and not args.left_topic:
-        raise DepthError("a bag needs --left-topic", field="--left-topic", hint="e.g. /camera/infra1/image_rect_raw")
-    if args.bag is not None and not (args.right_topic or args.depth_topic):
-        raise DepthError("a bag needs a second topic", field="--right-topic/--depth-topic",
-                         hint="--right-topic (stereo pairs) or --depth-topic (device depth)")
-    if args.bag is None and (args.left_topic or args.right_topic or args.depth_topic):
-        raise DepthError("topics need --bag", field="--left-topic", hint="pass --bag BAG")
-    if (args.right or args.right_topic) and (args.depth or args.depth_topic):
+    device = args.depth is not None or args.depth_topic is not None
+    if device and _stereo(args):
         raise DepthError("give one depth source", field="--right/--depth",
                          hint="--right (stereo pairs) or --depth (device depth), not both")
+    if _stereo(args):
+        from s2r.cli._recording import spec_from_args
+
+        spec_from_args(args).check(error=DepthError)
+    elif args.bag is not None:
+        if not args.left_topic:
+            raise DepthError("a bag needs --left-topic", field="--left-topic",
+                             hint="e.g. /camera/infra1/image_rect_raw")
+        if not device:
+            raise DepthError("a bag needs a second topic", field="--right-topic/--depth-topic",
+                             hint="--right-topic (stereo pairs) or --depth-topic (device depth)")
+    elif args.left is None:
+        raise DepthError("missing left images", field="--left", hint="pass --left DIR|GLOB (or a recording)")
+    if args.bag is None and (args.left_topic or args.right_topic or args.depth_topic):
+        raise DepthError("topics need --bag", field="--left-topic", hint="pass --bag BAG")
     if not 0 < args.square < float("inf"):
         raise DepthError(f"must be positive metres, got {args.square}", field="--square", hint="e.g. 0.025")
     if not 0 < args.max_dt < float("inf"):
@@ -95,41 +109,37 @@ def _check_fit_args(args: argparse.Namespace) -> None:
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
 
 
-def _raw_images(args: argparse.Namespace) -> list[BoardImage]:
+def _recording(args: argparse.Namespace, profile: StereoProfile, *, grey: bool) -> Any:
+    """The stereo recording the options name, its sizes checked against ``profile`` before decoding."""
+    from s2r.cli._recording import recording_from_args
+
+    sizes = ((profile.left.width_px, profile.left.height_px), (profile.right.width_px, profile.right.height_px))
+    return recording_from_args(args, expected_size=sizes, grey=grey, error=DepthError)
+
+
+def _raw_images(args: argparse.Namespace, profile: StereoProfile) -> list[BoardImage]:
     """The raw grey images of the recording's cameras (left, and right for stereo) with their boards."""
     from s2r.quality.inputs import IMAGE_SUFFIXES, list_files, read_grey
     from s2r.sensor_fit import board_image
 
     found = []
-    if args.bag is not None:
-        from s2r.quality.bags import bag_pairs, decode_image
-
-        for name, (lm, lt), (rm, rt) in bag_pairs(args.bag, args.left_topic, args.right_topic,
-                                                  other_flag="--right-topic", max_dt_s=args.max_dt):
-            images = [decode_image(lm, lt), decode_image(rm, rt)]
-            found += [board_image(name, img, args.pattern) for img in images]
+    if _stereo(args):
+        for frame in _recording(args, profile, grey=True).frames():
+            found += [board_image(frame.name, img, args.pattern) for img in (frame.left, frame.right)]
         return [f for f in found if f is not None]
-    specs = [("--left", args.left)] + ([("--right", args.right)] if args.right else [])
-    for option, spec in specs:
-        found += [board_image(p.name, read_grey(p), args.pattern) for p in list_files(spec, IMAGE_SUFFIXES,
-                                                                                         option=option)]
+    found += [board_image(p.name, read_grey(p), args.pattern)
+              for p in list_files(args.left, IMAGE_SUFFIXES, option="--left")]
     return [f for f in found if f is not None]
 
 
 def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[list[DepthFrame], int]:
     from s2r.depth.pipeline import StereoPipeline
-    from s2r.quality.inputs import IMAGE_SUFFIXES, list_files, pair_files
     from s2r.quality.run import measure_board_views
-    from s2r.quality.views import bag_stereo_views, stereo_fb, stereo_views, stereo_visible_m
+    from s2r.quality.views import frame_views, stereo_fb, stereo_visible_m
     from s2r.sensor_fit import stereo_depth_frames
 
     pipeline = StereoPipeline(profile, preset=args.preset)
-    if args.bag is not None:
-        views = bag_stereo_views(pipeline, args.bag, args.left_topic, args.right_topic, max_dt_s=args.max_dt)
-    else:
-        views = stereo_views(pipeline, pair_files(list_files(args.left, IMAGE_SUFFIXES, option="--left"),
-                                                  list_files(args.right, IMAGE_SUFFIXES, option="--right"),
-                                                  kind="right"))
+    views = frame_views(pipeline, _recording(args, profile, grey=False))
     result = measure_board_views(profile, views, pattern=args.pattern, square_m=args.square,
                                  fb_px_m=stereo_fb(pipeline), source="stereo", visible_m=stereo_visible_m(pipeline))
     return stereo_depth_frames(result.frames), len(result.frames)
@@ -170,8 +180,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         depth, images = _device_frames(args, profile)
         source = "device depth"
     else:
-        images = _raw_images(args)
-        depth, measured = _stereo_frames(args, profile) if (args.right or args.right_topic) else ([], 0)
+        images = _raw_images(args, profile)
+        depth, measured = _stereo_frames(args, profile) if _stereo(args) else ([], 0)
         source = "stereo pairs through the pipeline" if measured else "images"
     fit = fit_model(images, depth, source=f"s2r sensor fit on {source} ({profile.name})", stereo_frames=measured)
     dump_sensor_model(fit.model, args.out, force=args.force)

@@ -22,6 +22,7 @@ from s2r.cli._common import (
     parse_pattern,
     print_json,
 )
+from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import ValidateError
 from s2r.fileio import prepare_output_dir
 
@@ -52,9 +53,10 @@ def register(sub: Any) -> None:
                         help="depth pipeline preset for both profiles (profile, seed-sgbm, fast, bm, ros-default)")
     parser.add_argument("--distances", metavar="M,M,...", help="plane distances in metres (default by mode)")
     parser.add_argument("--recording", metavar="SRC", help="the real camera's chessboard recording: a folder (left/ "
-                        "right/, leftNN/rightNN, or left/ depth/ for device depth), or 'left=GLOB,right=GLOB', "
-                        "'left=DIR,depth=DIR', 'bag=BAG,left-topic=T,right-topic=T|depth-topic=T'; measured with "
-                        "Intel's metrics per distance bin beside the sim")
+                        "right/, leftNN/rightNN, or left/ depth/ for device depth; any existing path as it is), or "
+                        "'left=GLOB,right=GLOB', 'left=DIR,depth=DIR', 'bag=BAG,left-topic=T,right-topic=T|depth-topic="
+                        "T' (quote a value holding commas: left=\"a,b/\"); measured with Intel's metrics per distance "
+                        "bin beside the sim. Or give the real recording with the recording options below (videos too)")
     parser.add_argument("--sim-recording", metavar="SRC", help="the sim camera's own recording (same forms as "
                         "--recording, e.g. a Gazebo or MuJoCo run); without it the sim renders the recovered poses")
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
@@ -69,6 +71,8 @@ def register(sub: Any) -> None:
     parser.add_argument("--sensor-model", metavar="FILE",
                         help="sensor.yaml (s2r sensor fit): the SIM camera's blur and noise on every sim render; "
                         "default each profile's own sensor: section")
+    add_recording_arguments(parser, positional=None, what="the real camera's chessboard stereo recording (instead "
+                                                          "of --recording SRC)")
     from s2r.cli.render_cmd import add_renderer
 
     add_renderer(parser, scene_alias=True)
@@ -207,12 +211,26 @@ def _check_roles(sim: Any, real: Any, *, sim_path: str, real_path: str) -> None:
         "these two anyway")
 
 
+def _real_recording(args: argparse.Namespace) -> Any:
+    """The real recording: ``--recording SRC`` or the shared recording options (one of them), or None."""
+    from s2r.quality.source import RecordingSource, check_source, parse_source
+
+    spec = spec_from_args(args, positional=None)
+    if spec.kind == "none":
+        return None if args.recording is None else parse_source(args.recording, option="--recording")
+    if args.recording is not None:
+        raise ValidateError("give the real recording once", field="--recording",
+                            hint=f"--recording SRC or {spec.kind} options, not both")
+    return check_source(RecordingSource(recording=spec), option="--recording")
+
+
 def _recording(args: argparse.Namespace, pair: bool) -> Any:
     """The --recording / --sim-recording spec (checked before any work), or None."""
     from s2r.quality.source import parse_source
     from s2r.validate.run import RecordingSpec
 
-    if args.recording is None:
+    real = _real_recording(args)
+    if real is None:
         if args.sim_recording is not None:
             raise ValidateError("--sim-recording is compared with a real recording", field="--sim-recording",
                                 hint="pass --recording SRC too")
@@ -220,9 +238,8 @@ def _recording(args: argparse.Namespace, pair: bool) -> Any:
     if not pair:
         raise ValidateError("--recording compares a sim with a real camera", field="--recording",
                             hint="pass SIM REAL profiles")
-    parse_source(args.recording, option="--recording")
     if args.sim_recording is not None:
         parse_source(args.sim_recording, option="--sim-recording")
     if not args.square > 0:
         raise ValidateError(f"must be positive metres, got {args.square}", field="--square", hint="e.g. 0.025")
-    return RecordingSpec(str(args.recording), tuple(args.pattern), float(args.square), args.sim_recording)
+    return RecordingSpec(real, tuple(args.pattern), float(args.square), args.sim_recording)

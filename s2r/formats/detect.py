@@ -19,6 +19,7 @@ from s2r.errors import FormatError
 from s2r.formats._common import first_document, read_text, read_yaml
 from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr, strip_yaml_directive
 from s2r.formats.realsense import is_realsense_text, load_realsense
+from s2r.formats.realsense_recording import is_realsense_recording, load_realsense_recording
 from s2r.formats.ros import camera_info_from_filestorage, is_camera_info_mapping, load_ros_pair
 from s2r.formats.s2r_yaml import load_profile_file
 from s2r.formats.zed import is_zed_conf, load_zed
@@ -31,15 +32,16 @@ __all__ = ["FORMAT_NAMES", "Format", "check_layout", "detect_format", "is_robot_
 
 log = logging.getLogger(__name__)
 
-Format = Literal["s2r", "ros", "opencv", "kalibr", "realsense", "zed"]
+Format = Literal["s2r", "ros", "opencv", "kalibr", "realsense", "realsense_recording", "zed"]
 #: Human names of the formats, as used in messages and provenance.
 FORMAT_NAMES: dict[str, str] = {
     "s2r": "s2r profile YAML", "ros": "ROS camera_info", "opencv": "OpenCV FileStorage",
-    "kalibr": "Kalibr camchain", "realsense": "rs-enumerate-devices text", "zed": "ZED SN*.conf",
+    "kalibr": "Kalibr camchain", "realsense": "rs-enumerate-devices text",
+    "realsense_recording": "RealSense recording (.db3 / ROS 1 .bag)", "zed": "ZED SN*.conf",
 }
 _EXPECTED = (
     "expected an s2r profile, ROS camera_info, OpenCV FileStorage (stereo_calib, ORB-SLAM, VINS-Fusion, Kimera-VIO), "
-    "Kalibr camchain, ZED SN*.conf or rs-enumerate-devices -c text"
+    "Kalibr camchain, ZED SN*.conf, rs-enumerate-devices -c text or a RealSense recording (.db3 / .bag)"
 )
 #: Baselines outside this range (metres) are reported as implausible.
 PLAUSIBLE_BASELINE_M = (0.002, 1.0)
@@ -89,6 +91,8 @@ def detect_format(path: str | Path) -> Format:
             return "ros"
         raise FormatError("is a folder without left.yaml and right.yaml", path=source,
                           hint="pass a calibration file, or a folder holding a ROS left.yaml/right.yaml pair")
+    if is_realsense_recording(source):  # binary: SQLite (.db3) or ROS 1 bag, told by their first bytes
+        return "realsense_recording"
     text = read_text(source)
     if is_zed_conf(text):
         return "zed"
@@ -200,7 +204,8 @@ def load_any(
     """Load a stereo profile from any supported format, detected from content.
 
     Args:
-        paths: one file (s2r, OpenCV, Kalibr, RealSense text, or a folder with ROS left.yaml/right.yaml) or two
+        paths: one file (s2r, OpenCV, Kalibr, RealSense text or recording, or a folder with ROS
+            left.yaml/right.yaml) or two
             (ROS left + right camera_info; OpenCV intrinsics + extrinsics).
         name: profile name for imported formats (default derived from the file).
         origin: provenance origin of imported profiles (``real``, ``sim`` or ``nominal``).
@@ -299,4 +304,6 @@ def _load_single(source: Path, fmt: Format, *, name: str | None, origin: str, im
         return load_kalibr(source, name=name, origin=origin, left=cameras[0], right=cameras[1])
     if fmt == "zed":
         return load_zed(source, resolution=resolution, name=name, origin=origin)
+    if fmt == "realsense_recording":
+        return load_realsense_recording(source, name=name, origin=origin)
     return load_realsense(source, resolution=resolution, name=name, origin=origin)

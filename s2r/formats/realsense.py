@@ -34,7 +34,8 @@ from s2r.formats._common import (
 )
 from s2r.profile import Camera, StereoProfile
 
-__all__ = ["RealSenseExtrinsic", "RealSenseIntrinsic", "is_realsense_text", "load_realsense", "parse_realsense"]
+__all__ = ["RealSenseExtrinsic", "RealSenseIntrinsic", "camera_from_intrinsic", "is_realsense_text", "load_realsense",
+           "parse_realsense"]
 
 log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
@@ -193,8 +194,10 @@ def _resolution(intrinsics: list[RealSenseIntrinsic], left: str, right: str, wan
                       hint="pick one with --resolution WIDTHxHEIGHT")
 
 
-def _camera(intr: RealSenseIntrinsic, path: Path, frame_id: str) -> Camera:
-    field = f'line {intr.line} "{intr.stream}" {intr.width}x{intr.height}'
+def camera_from_intrinsic(intr: RealSenseIntrinsic, path: Path, frame_id: str) -> Camera:
+    """A :class:`Camera` from one stream's intrinsics: Brown Conrady (or none) as plumb_bob, Kannala Brandt4 as
+    equidistant; other models refused unless every coefficient is zero. ``intr.line`` 0: not from a text file."""
+    field = f'{f"line {intr.line} " if intr.line else ""}"{intr.stream}" {intr.width}x{intr.height}'
     model = intr.distortion.strip().lower()
     if model == "kannala brandt4":
         distortion = distortion_for("equidistant", intr.coeffs[:4], path, f"{field}: Coeffs")
@@ -254,8 +257,8 @@ def load_realsense(
     intrinsics, extrinsics = parse_realsense(source, streams={left, right})
     size = _resolution(intrinsics, left, right, resolution, source)
     kind = "fisheye" if left.lower().startswith("fisheye") else "infra"  # realsense2_camera's frame names
-    lcam = _camera(_pick(intrinsics, left, size), source, f"camera_{kind}1_optical_frame")
-    rcam = _camera(_pick(intrinsics, right, size), source, f"camera_{kind}2_optical_frame")
+    lcam = camera_from_intrinsic(_pick(intrinsics, left, size), source, f"camera_{kind}1_optical_frame")
+    rcam = camera_from_intrinsic(_pick(intrinsics, right, size), source, f"camera_{kind}2_optical_frame")
     R, T = _stereo_extrinsics(extrinsics, left, right, source)
     return build_stereo(
         name=name or f"realsense_{size[0]}x{size[1]}", left=lcam, right=rcam, R=R, T=T, path=source,

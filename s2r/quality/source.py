@@ -8,6 +8,11 @@ Forms of ``SRC`` (``validate --recording SRC --sim-recording SRC``):
   depth registered to the left images: uint16 mm PNG or float32 metres ``.npy``), optional ``depth-scale=M``;
 - ``bag=BAG,left-topic=T,right-topic=T`` or ``bag=BAG,left-topic=T,depth-topic=T``, optional ``max-dt=S``.
 
+A ``SRC`` naming an existing file or folder is that path, whatever characters it holds (``=``, ``,``, quotes); a
+value of ``key=value`` may be quoted (``left="a,b=c/",right='r/'``) to hold commas or ``=``. Stereo pairs may also
+be any recording form of :mod:`s2r.recordings` (videos too), given as a :class:`~s2r.recordings.RecordingSpec`
+(``RecordingSource(recording=...)``: the commands' shared recording options).
+
 Stereo pairs go through the profile's pipeline (depth in the rectified left camera); device depth is scored in
 the left camera with the profile's intrinsics and distortion.
 """
@@ -15,7 +20,7 @@ the left camera with the profile's intrinsics and distortion.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sized
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,8 +31,9 @@ from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M
 from s2r.quality.run import DepthView
+from s2r.recordings import RecordingSpec, open_recording
 
-__all__ = ["OpenedSource", "RecordingSource", "check_source", "open_source", "parse_source"]
+__all__ = ["OpenedSource", "RecordingSource", "check_source", "open_source", "parse_source", "stereo_spec"]
 
 _KEYS = {"left": "left", "right": "right", "depth": "depth", "bag": "bag", "left-topic": "left_topic",
          "right-topic": "right_topic", "depth-topic": "depth_topic", "max-dt": "max_dt_s",
@@ -48,6 +54,7 @@ class RecordingSource:
     depth_topic: str | None = None
     max_dt_s: float = 0.01
     depth_scale_m: float = DEFAULT_DEPTH_SCALE_M
+    recording: RecordingSpec | None = None
 
     @property
     def stereo(self) -> bool:
@@ -56,6 +63,8 @@ class RecordingSource:
 
     def describe(self) -> str:
         """A short human name: the folder, the globs or the bag and its topics."""
+        if self.recording is not None:
+            return self.recording.describe()
         if self.bag is not None:
             return f"{self.bag} ({self.left_topic} + {self.right_topic or self.depth_topic})"
         if self.folder is not None and self.left is None:
@@ -73,21 +82,43 @@ def _number(key: str, text: str, option: str) -> float:
     return value
 
 
+def _parts(text: str, option: str) -> list[str]:
+    """``text`` split at the commas outside quotes, each part's quotes removed (a value may hold ``,`` and ``=``)."""
+    parts, current, quote = [], [], ""
+    for ch in text:
+        if quote:
+            if ch == quote:
+                quote = ""
+            else:
+                current.append(ch)
+        elif ch in "\"'":
+            quote = ch
+        elif ch == ",":
+            parts.append("".join(current))
+            current = []
+        else:
+            current.append(ch)
+    if quote:
+        raise DepthError(f"unclosed {quote} quote in {text!r}", field=option, hint="close the quote around the value")
+    return [*parts, "".join(current)]
+
+
 def parse_source(text: str, *, option: str = "--recording") -> RecordingSource:
     """``SRC`` (module docstring) as a :class:`RecordingSource`; DepthError naming ``option`` when malformed."""
-    if "=" not in text:
+    if "=" not in text or Path(text).exists():  # an existing path is that path, whatever it holds
         folder = Path(text)
         if folder.is_dir() and (folder / "left").is_dir() and (folder / "depth").is_dir():
             return check_source(RecordingSource(folder=text, left=str(folder / "left"), depth=str(folder / "depth")),
                                 option=option)
         return check_source(RecordingSource(folder=text), option=option)
     values: dict[str, str | float] = {}
-    for part in text.split(","):
+    for part in _parts(text, option):
         key, sep, value = part.partition("=")
         key = key.strip()
         if not sep or key not in _KEYS or not value:
             raise DepthError(f"cannot read {part!r}: expected key=value with a key of {', '.join(_KEYS)}",
-                             field=option, hint="e.g. left=L/,right=R/ or bag=run.bag,left-topic=/l,depth-topic=/d")
+                             field=option, hint="e.g. left=L/,right=R/ or bag=run.bag,left-topic=/l,depth-topic=/d; "
+                             "quote a value holding commas: left=\"a,b/\"")
         values[_KEYS[key]] = _number(key, value, option) if key in ("max-dt", "depth-scale") else value
     return check_source(RecordingSource(**values), option=option)  # type: ignore[arg-type]
 
@@ -95,6 +126,9 @@ def parse_source(text: str, *, option: str = "--recording") -> RecordingSource:
 def check_source(source: RecordingSource, *, option: str, need_left: bool = True) -> RecordingSource:
     """``source`` when it names exactly one depth source and what that needs (left images unless ``need_left`` is
     False: device depth of a flat wall); DepthError naming ``option``."""
+    if source.recording is not None:
+        source.recording.check(error=DepthError)
+        return source
     if source.folder is not None and source.left is None:
         if not Path(source.folder).is_dir():
             raise DepthError("recording folder not found", path=source.folder, field=option,
@@ -128,20 +162,16 @@ class OpenedSource:
     R1: NDArray[np.float64] | None
 
 
-def _stereo_frames(source: RecordingSource) -> list[tuple[Path, Path]]:
-    from s2r.quality.inputs import IMAGE_SUFFIXES, list_files
-
+def stereo_spec(source: RecordingSource) -> RecordingSpec:
+    """The stereo pairs of ``source`` as a :class:`~s2r.recordings.RecordingSpec` (folder, globs or bag)."""
+    if source.recording is not None:
+        return source.recording
+    if source.bag is not None:
+        return RecordingSpec(bag=Path(source.bag), left_topic=source.left_topic, right_topic=source.right_topic,
+                             max_dt_s=source.max_dt_s)
     if source.left is None:
-        from s2r.calib import find_stereo_pairs  # the package namespace: stable across the calib layout
-
-        pairs = find_stereo_pairs(Path(str(source.folder)))
-        return list(zip(pairs.left, pairs.right, strict=True))
-    left = list_files(source.left, IMAGE_SUFFIXES, option="--left")
-    right = list_files(str(source.right), IMAGE_SUFFIXES, option="--right")
-    if len(left) != len(right):
-        raise DepthError(f"{len(left)} left images but {len(right)} right images", field="--right",
-                         hint="give one right image per left image (paired in sorted name order)")
-    return list(zip(left, right, strict=True))
+        return RecordingSpec(folder=Path(str(source.folder)))
+    return RecordingSpec(left_glob=source.left, right_glob=source.right)
 
 
 def open_source(profile: StereoProfile, source: RecordingSource, *, preset: str = "profile",
@@ -156,12 +186,12 @@ def open_source(profile: StereoProfile, source: RecordingSource, *, preset: str 
         pipe = StereoPipeline(profile, preset=preset, num_disparities=num_disparities)
         R1 = np.asarray(pipe.rectification.R1, np.float64)
         fb, visible = v.stereo_fb(pipe), v.stereo_visible_m(pipe)
-        if source.bag is not None:
-            views = v.bag_stereo_views(pipe, Path(source.bag), str(source.left_topic), str(source.right_topic),
-                                       max_dt_s=source.max_dt_s)
-            return OpenedSource(views, None, fb, f"stereo from bag, preset {preset}", visible, R1)
-        frames = [FramePaths(a, right=b) for a, b in _stereo_frames(source)]
-        return OpenedSource(v.stereo_views(pipe, frames), len(frames), fb, f"stereo, preset {preset}", visible, R1)
+        sizes = ((profile.left.width_px, profile.left.height_px), (profile.right.width_px, profile.right.height_px))
+        recording = open_recording(stereo_spec(source), expected_size=sizes, error=DepthError)
+        total = len(recording) if isinstance(recording, Sized) else None
+        kind = "from bag" if source.bag is not None else ""
+        return OpenedSource(v.frame_views(pipe, recording), total, fb,
+                            " ".join(w for w in ("stereo", kind) if w) + f", preset {preset}", visible, R1)
     fb = v.device_fb(profile)
     if source.bag is not None:
         views = v.bag_device_views(profile, Path(source.bag), str(source.left_topic), str(source.depth_topic),

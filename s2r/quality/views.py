@@ -16,8 +16,11 @@ from s2r.profile import StereoProfile
 from s2r.quality.bags import bag_pairs, decode_depth, decode_image
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M, FramePaths, read_depth, read_grey
 from s2r.quality.run import DepthView
+from s2r.recordings import FrameSource
+from s2r.recordings.files import FileFrames
 
-__all__ = ["bag_device_views", "bag_stereo_views", "check_depth_size", "device_fb", "device_views", "stereo_fb",
+__all__ = ["bag_device_views", "bag_stereo_views", "check_depth_size", "device_fb", "device_views", "frame_views",
+           "stereo_fb",
            "stereo_view", "stereo_views", "stereo_visible_m"]
 
 
@@ -76,6 +79,19 @@ def stereo_view(pipeline: StereoPipeline, name: str, left: NDArray[np.uint8], ri
 
     return DepthView(name, np.asarray(grey, np.uint8), result.depth, K, np.zeros(5),
                      disparity_range=(geo.config.min_disparity, geo.config.num_disparities), rematch=rematch)
+
+
+def frame_views(pipeline: StereoPipeline, recording: FrameSource) -> Iterator[DepthView]:
+    """A recording's stereo frames through the pipeline (see :func:`stereo_view`), one at a time, named by the frame.
+    Grey still images go in as BGR (3 equal channels), as they always were read from files here."""
+    colour = isinstance(recording, FileFrames)
+    for frame in recording.frames():
+        left, right = frame.left, frame.right
+        if colour and left.ndim == 2:
+            left = np.asarray(cv2.cvtColor(left, cv2.COLOR_GRAY2BGR), np.uint8)
+            right = np.asarray(cv2.cvtColor(right, cv2.COLOR_GRAY2BGR), np.uint8)
+        name = recording.pairs.left[frame.index].name if isinstance(recording, FileFrames) else frame.name
+        yield stereo_view(pipeline, name, left, right)
 
 
 def stereo_views(pipeline: StereoPipeline, frames: Sequence[FramePaths]) -> Iterator[DepthView]:

@@ -108,10 +108,11 @@ class ValidationResult:
 
 @dataclass(frozen=True)
 class RecordingSpec:
-    """Recordings to compare on: the real one (``folder``: any ``SRC`` of :mod:`s2r.quality.source`), the sim's own
-    (``sim``, None: rendered at the recovered poses), the board's inner corners and square (metres)."""
+    """Recordings to compare on: the real one (``folder``: any ``SRC`` of :mod:`s2r.quality.source`, or a
+    ``RecordingSource`` built from the shared recording options), the sim's own (``sim``, None: rendered at the
+    recovered poses), the board's inner corners and square (metres)."""
 
-    folder: str
+    folder: Any
     pattern: tuple[int, int] = (9, 6)
     square_m: float = 0.025
     sim: str | None = None

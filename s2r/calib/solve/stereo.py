@@ -86,7 +86,9 @@ class StereoCalibration:
     skipped image or view with its reason; ``threshold_px`` the outlier threshold of the last round;
     coverage per camera; ``spread`` of the board poses (left camera); ``epipolar_rms_px`` the RMS of
     y differences of matching corners after rectification; ``corners_left/right`` the used views' corners;
-    ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report.
+    ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report; ``frames`` (stream
+    inputs: videos) the frames read, used as views and not kept by reason
+    (:func:`s2r.calib.solve.stereo_stream.frame_counts`).
     """
 
     profile: StereoProfile
@@ -113,6 +115,7 @@ class StereoCalibration:
     board: str = ""
     projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
     board_warp: dict[str, Any] | None = None
+    frames: dict[str, Any] | None = None
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -148,6 +151,7 @@ class StereoCalibration:
             "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
             "projection_uncertainty": {side: {src: None if m is None else m.as_dict() for src, m in maps.items()}
                                        for side, maps in self.projection.items()},
+            "frames": self.frames,
         }
 
 
