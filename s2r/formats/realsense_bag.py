@@ -174,6 +174,7 @@ def read_bag_facts(path: str | Path) -> RecordingFacts:
         units = None
         for topic in sorted(t for t in bag.topics if _OPTION_TOPIC.match(t)):
             values = bag.all(topic, "std_msgs/msg/Float32")
-            units = as_float(float(values[0].data), bag.path, topic) if values else None
+            # a Float32: its shortest float32 text (0.001, not 0.00100000005)
+            units = as_float(float(str(np.float32(values[0].data))), bag.path, topic) if values else None
             break
         return RecordingFacts(path=bag.path, layout="ros1-bag", device=device, streams=streams, depth_units_m=units)
