@@ -16,6 +16,7 @@ __all__ = [
     "FormatError",
     "OutputExistsError",
     "ProfileError",
+    "RecordingError",
     "RenderError",
     "S2RError",
     "SourceError",
@@ -97,6 +98,10 @@ class DepthError(S2RError):
 
 class ValidateError(S2RError):
     """A validation request is malformed (tolerances, distances, report folder)."""
+
+
+class RecordingError(S2RError):
+    """A recording (image folder, globs, bag, video) cannot be read as stereo frames."""
 
 
 class CheckError(S2RError):

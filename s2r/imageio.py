@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 from s2r.fileio import NotARegularFile, read_regular_file
 from s2r.limits import MAX_IMAGE_PX
 
-__all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log"]
+__all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log",
+           "size_mismatch_reason"]
 
 _PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
 #: A PNG chunk's length (big-endian, bytes of data) and type.
@@ -145,10 +146,22 @@ def oversize_reason(data: bytes) -> str:
     return ""
 
 
-def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tuple[NDArray[Any] | None, str]:
+def size_mismatch_reason(data: bytes, expected_size: tuple[int, int] | None) -> str:
+    """Why the image's declared (PNG/JPEG header) size is not ``expected_size`` (width, height) px; '' when it is,
+    when nothing is expected, or when the header does not tell (the decoded image is then checked instead)."""
+    size = declared_size(data)
+    if expected_size is None or size is None or tuple(size) == tuple(expected_size):
+        return ""
+    return f"the header declares {size[0]}x{size[1]} px but {expected_size[0]}x{expected_size[1]} px are expected"
+
+
+def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED, *,
+                      expected_size: tuple[int, int] | None = None) -> tuple[NDArray[Any] | None, str]:
     """``(image, "")`` for a readable image file, else ``(None, reason in plain words)``.
 
-    ``flags`` as ``cv2.imdecode`` (``cv2.IMREAD_GRAYSCALE`` for (H, W) uint8). Nothing is printed.
+    ``flags`` as ``cv2.imdecode`` (``cv2.IMREAD_GRAYSCALE`` for (H, W) uint8). ``expected_size`` (width, height)
+    px: a PNG/JPEG whose header declares another size is refused before anything is decoded (the caller checks
+    the decoded size of other formats). Nothing is printed.
     """
     path = Path(path)
     try:
@@ -160,7 +173,7 @@ def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED) -> tu
     if not data:
         return None, "the file is empty"
     chunks, reason = _png_chunks(data) if data.startswith(_PNG_MAGIC) else ([], _truncated_jpeg(data))
-    reason = reason or oversize_reason(data)
+    reason = reason or oversize_reason(data) or size_mismatch_reason(data, expected_size)
     if reason:
         return None, reason
     with _native_stderr_silenced():
