@@ -137,9 +137,9 @@ def test_bag_depth_equals_files_depth_bit_for_bit(known: dict[str, Any], tmp_pat
         d = _image(disp_msg.image, np.float32)
         valid = d >= disp_msg.min_disparity
         np.testing.assert_array_equal(valid, np.isfinite(from_files))
-        f, T = (disp_msg.f, disp_msg.T) if target == "ros1" else (disp_msg.f, disp_msg.t)
-        np.testing.assert_allclose(f * T / d[valid], from_files[valid], rtol=1e-6)
-        assert f == pytest.approx(rect.fx_px) and T == pytest.approx(rect.baseline_m)
+        f, baseline = disp_msg.f, (disp_msg.T if target == "ros1" else disp_msg.t)
+        np.testing.assert_allclose(f * baseline / d[valid], from_files[valid], rtol=1e-6)
+        assert f == pytest.approx(rect.fx_px) and baseline == pytest.approx(rect.baseline_m)
     right_info = msgs["/stereo/right/camera_info"][0][1]
     P = np.asarray(right_info.P if target == "ros1" else right_info.p).reshape(3, 4)
     assert P[0, 3] == pytest.approx(-rect.fx_px * rect.baseline_m)
