@@ -36,13 +36,13 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_depth import bench_profile, textured_pair  # noqa: E402
+from bench_depth import bench_profile, textured_pair
 
-from s2r.depth.pipeline import StereoPipeline  # noqa: E402
-from s2r.depth.stream import DepthFrame  # noqa: E402
-from s2r.depth.writers import open_writer, write_stream  # noqa: E402
-from s2r.formats.ros import ros_pair_from_profile  # noqa: E402
-from s2r.recordings import open_recording  # noqa: E402
+from s2r.depth.pipeline import StereoPipeline
+from s2r.depth.stream import DepthFrame
+from s2r.depth.writers import open_writer, write_stream
+from s2r.formats.ros import ros_pair_from_profile
+from s2r.recordings import open_recording
 
 LEFT, RIGHT = "/stereo/left/image_raw", "/stereo/right/image_raw"
 HERE = Path(__file__).resolve().parent
@@ -183,8 +183,8 @@ def ros_stereo_image_proc(bag: Path, tmp: Path, s2r_fps: float) -> None:
     got = json.loads(done.stdout)
     ros_fps = got["disparities"] / got["wall_s"] if got["wall_s"] > 0 else float("nan")
     print(f"stereo_image_proc (rosbag play -r {got['rate']}, {got['offered']} pairs offered): {got['disparities']} "
-          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU {1e3 * got['node_cpu_s'] / max(1, got['disparities']):.1f} "
-          f"ms/frame; s2r stream {s2r_fps:.1f} fps: ratio s2r / stereo_image_proc x{s2r_fps / ros_fps:.2f}  "
+          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU "
+          f"{1e3 * got['node_cpu_s'] / max(1, got['disparities']):.1f} ms/frame; s2r stream {s2r_fps:.1f} fps: ratio s2r / stereo_image_proc x{s2r_fps / ros_fps:.2f}  "
           f"[{load()}]" + (f" (parameter notes: {'; '.join(notes)})" if notes else ""), flush=True)
 
 
