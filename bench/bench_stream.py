@@ -42,6 +42,7 @@ from s2r.depth.pipeline import StereoPipeline
 from s2r.depth.stream import DepthFrame
 from s2r.depth.writers import open_writer, write_stream
 from s2r.formats.ros import ros_pair_from_profile
+from s2r.profile import StereoProfile
 from s2r.recordings import open_recording
 
 LEFT, RIGHT = "/stereo/left/image_raw", "/stereo/right/image_raw"
@@ -52,8 +53,14 @@ def load() -> str:
     return "load " + " ".join(f"{v:.2f}" for v in os.getloadavg())
 
 
+def stream_profile() -> StereoProfile:
+    """The bench profile with speckle_range 31, the largest stereo_image_proc accepts (so both match alike)."""
+    profile = bench_profile()
+    return profile.model_copy(update={"matcher": profile.matcher.model_copy(update={"speckle_range": 31})})
+
+
 def pipeline() -> StereoPipeline:
-    return StereoPipeline(bench_profile(), preset="profile", postprocess=())
+    return StereoPipeline(stream_profile(), preset="profile", postprocess=())
 
 
 def write_input_bag(path: Path, frames: int) -> None:
@@ -63,7 +70,7 @@ def write_input_bag(path: Path, frames: int) -> None:
 
     store = get_typestore(Stores.ROS1_NOETIC)
     t = store.types
-    infos = ros_pair_from_profile(bench_profile())
+    infos = ros_pair_from_profile(stream_profile())
     with Writer(path) as writer:
         conns = {topic: writer.add_connection(topic, kind, typestore=store) for topic, kind in (
             (LEFT, "sensor_msgs/msg/Image"), (RIGHT, "sensor_msgs/msg/Image"),
@@ -152,7 +159,7 @@ def whole_process(bag: Path, tmp: Path, rounds: int, frames: int) -> None:
     profile = str(tmp / "profile.yaml")
     from s2r.formats.s2r_yaml import dump_profile
 
-    dump_profile(bench_profile(), profile)
+    dump_profile(stream_profile(), profile)
     cli = [s2r, "-q", "depth", profile, "--bag", str(bag), "--left-topic", LEFT, "--right-topic", RIGHT,
            "--postprocess", "", "-o", str(tmp / "cli.bag"), "--to", "ros1", "--force", "--keep-out-of-range"]
     plain = [sys.executable, __file__, "--plain-child", str(bag), str(tmp / "plain_child.bag")]
@@ -182,10 +189,11 @@ def ros_stereo_image_proc(bag: Path, tmp: Path, s2r_fps: float) -> None:
         return
     got = json.loads(done.stdout)
     ros_fps = got["disparities"] / got["wall_s"] if got["wall_s"] > 0 else float("nan")
+    node_ms = 1e3 * got["node_cpu_s"] / max(1, got["disparities"])
     print(f"stereo_image_proc (rosbag play -r {got['rate']}, {got['offered']} pairs offered): {got['disparities']} "
-          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU "
-          f"{1e3 * got['node_cpu_s'] / max(1, got['disparities']):.1f} ms/frame; s2r stream {s2r_fps:.1f} fps: ratio s2r / stereo_image_proc x{s2r_fps / ros_fps:.2f}  "
-          f"[{load()}]" + (f" (parameter notes: {'; '.join(notes)})" if notes else ""), flush=True)
+          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU {node_ms:.1f} ms/frame; s2r stream "
+          f"{s2r_fps:.1f} fps: ratio s2r / stereo_image_proc x{s2r_fps / ros_fps:.2f}  [{load()}]"
+          + (f" (parameter notes: {'; '.join(notes)})" if notes else ""), flush=True)
 
 
 def main() -> None:
