@@ -32,11 +32,13 @@ def register(sub: Any) -> None:
     """Add ``s2r depth``."""
     parser = sub.add_parser(
         "depth", help="depth maps from stereo pairs",
-        description="Rectify with a profile, match with a preset, and write disparity.npy (float32 px, NaN "
-        "invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET with a colour bar in metres), "
-        "camera_info.yaml (ROS camera_info of the rectified left camera, the frame of every output) and "
-        "optionally points.ply. Depth outside the profile's matcher.min_depth_m..max_depth_m is invalid unless "
-        "--keep-out-of-range.")
+        description="Rectify with a profile, match with a preset, and write depth. One pair (PROFILE LEFT RIGHT): "
+        "disparity.npy (float32 px, NaN invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET with a colour "
+        "bar in metres), camera_info.yaml (ROS camera_info of the rectified left camera, the frame of every output) "
+        "and optionally points.ply. A recording (PROFILE FOLDER, or --bag/--video/--left ...) is streamed into "
+        "--to files (per-frame files named after the input frames, frames.csv), ros2 (a ROS 2 mcap bag folder) or "
+        "ros1 (a .bag), published whole. Depth outside the profile's matcher.min_depth_m..max_depth_m is invalid "
+        "unless --keep-out-of-range.")
     parser.add_argument("inputs", nargs="*", metavar="PROFILE [LEFT RIGHT | FOLDER]",
                         help="the profile (name or YAML path; default $S2R_PROFILE), then one pair of images or a "
                         "recording FOLDER (or give the recording with the options below)")

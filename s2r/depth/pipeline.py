@@ -241,15 +241,23 @@ class StereoPipeline:
         (:func:`s2r.depth.stream.depth_frames`).
 
         Args:
-            recording: a ``FrameSource`` (anything with ``frames()``) or an iterable of
-                :class:`s2r.recordings.StereoFrame`.
+            recording: a ``FrameSource`` (:func:`s2r.recordings.open_recording`: folders, globs, bags, videos), a
+                :class:`s2r.recordings.RecordingSpec`, a folder path (``left/`` + ``right/``, ...), or any iterable
+                of :class:`s2r.recordings.StereoFrame`. Images of another size than the profile's are refused
+                from their headers, before decoding (unless ``resize``).
             workers: matching threads.
             depth_range_m: ``(near, far)`` metres; depths outside are invalid (default: all kept).
 
         Yields :class:`s2r.depth.stream.DepthFrame`: ``name``, ``stamp_ns``, ``frame_id`` and ``result``.
         """
         from s2r.depth.stream import depth_frames
+        from s2r.recordings import RecordingSpec, open_recording
 
+        size = None if self.resize or self.rectified else self.profile.image_size
+        if isinstance(recording, (str, Path)):
+            recording = open_recording(folder=Path(recording), expected_size=size, error=DepthError)
+        elif isinstance(recording, RecordingSpec):
+            recording = open_recording(recording, expected_size=size, error=DepthError)
         frames = recording.frames() if hasattr(recording, "frames") else recording
         return depth_frames(self, frames, workers=workers, depth_range_m=depth_range_m)
 
