@@ -87,7 +87,7 @@ def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, st
 
 def _check_options(args: argparse.Namespace) -> None:
     files = args.to == "files"
-    misplaced = ([("--pcd", args.pcd)] if not files else
+    misplaced = ([("--pcd", args.pcd), ("--ply", args.ply)] if not files else
                  [("--depth-encoding", args.depth_encoding != "32FC1"), ("--namespace", args.namespace != "/stereo")])
     for option, given in misplaced:
         if given:

@@ -40,6 +40,7 @@ __all__ = [
     "limit_depth_range",
     "pcd_bytes",
     "ply_bytes",
+    "png_bytes",
     "read_image",
     "rectified_camera_info",
     "write_camera_info",
@@ -172,7 +173,8 @@ def write_camera_info(path: str | Path, rect: StereoRectification, *, name: str 
     return atomic_write_text(path, text, force=force)
 
 
-def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
+def png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
+    """``image`` (8- or 16-bit) as PNG bytes; DepthError naming ``path`` when OpenCV cannot encode it."""
     ok, buf = cv2.imencode(".png", image)
     if not ok:
         raise DepthError("PNG encoding failed", path=path)
@@ -182,7 +184,7 @@ def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> byt
 def write_depth_png(path: str | Path, depth_m: NDArray[np.floating], *, force: bool = False) -> Path:
     """Write depth (metres, NaN invalid) as a uint16 millimetre PNG, 0 invalid."""
     path = Path(path)
-    return atomic_write_bytes(path, _png_bytes(depth_to_mm(depth_m), path), force=force)
+    return atomic_write_bytes(path, png_bytes(depth_to_mm(depth_m), path), force=force)
 
 
 def write_disparity(path: str | Path, disparity: NDArray[np.floating], *, force: bool = False) -> Path:
@@ -243,8 +245,8 @@ def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", 
     depth_path = folder / f"{prefix}depth.png"
     written = [
         batch.add_bytes(folder / f"{prefix}disparity.npy", npy_bytes(np.asarray(result.disparity, np.float32))),
-        batch.add_bytes(depth_path, _png_bytes(depth_to_mm(result.depth), depth_path)),
-        batch.add_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q, colour_range_m),
+        batch.add_bytes(depth_path, png_bytes(depth_to_mm(result.depth), depth_path)),
+        batch.add_bytes(colour_path, png_bytes(depth_colour_with_bar(result.disparity, result.Q, colour_range_m),
                                                colour_path)),
     ]
     if ply:

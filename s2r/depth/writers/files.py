@@ -23,15 +23,16 @@ from pathlib import Path
 import numpy as np
 
 from s2r.depth.outputs import (
-    _png_bytes,
     depth_colour_with_bar,
     depth_to_mm,
     pcd_bytes,
     ply_bytes,
+    png_bytes,
     rectified_camera_info,
 )
+from s2r.depth.pipeline import StereoPipeline
 from s2r.depth.stream import DepthFrame
-from s2r.depth.writers.base import StreamWriter
+from s2r.depth.writers.base import StreamOptions, StreamWriter
 from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, npy_bytes, prepare_output_dir
 from s2r.formats.ros import camera_info_to_yaml
@@ -46,8 +47,8 @@ INDEX_COLUMNS = ("index", "name", "stamp_ns", "stamp_source", "frame_id", "sourc
 class FilesWriter(StreamWriter):
     """Per-frame depth files in OUT, published with ``camera_info.yaml`` and ``frames.csv`` at the end."""
 
-    def __init__(self, out: Path, pipeline: object, **kwargs: object) -> None:
-        super().__init__(out, pipeline, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, out: Path, pipeline: StereoPipeline, *, force: bool, options: StreamOptions) -> None:
+        super().__init__(out, pipeline, force=force, options=options)
         self._created = not self.out.exists() and not self.out.is_symlink()
         prepare_output_dir(self.out, force=self.force)
         self._batch = OutputBatch(force=self.force, root=self.out)
@@ -71,10 +72,10 @@ class FilesWriter(StreamWriter):
             "index": frame.index, "name": name, "stamp_ns": frame.stamp_ns,
             "stamp_source": "synthesized" if frame.stamp_synthesized else "recorded", "frame_id": frame.frame_id,
             "source": frame.source, "valid_fraction": f"{float(r.valid.mean()):.6f}",
-            "depth_png": self._add(f"depth/{name}.png", _png_bytes(depth_to_mm(r.depth), depth_png)),
+            "depth_png": self._add(f"depth/{name}.png", png_bytes(depth_to_mm(r.depth), depth_png)),
             "depth_npy": self._add(f"depth/{name}.npy", npy_bytes(np.asarray(r.depth, np.float32))),
             "disparity_npy": self._add(f"disparity/{name}.npy", npy_bytes(np.asarray(r.disparity, np.float32))),
-            "color_png": self._add(f"color/{name}.png", _png_bytes(
+            "color_png": self._add(f"color/{name}.png", png_bytes(
                 depth_colour_with_bar(r.disparity, r.Q, self.options.colour_range_m), depth_png)),
             "points_ply": "", "points_pcd": ""}
         if self.options.points or self.options.pcd:
