@@ -231,3 +231,14 @@ def test_readme_stream_script_runs(known: dict[str, Any], tmp_path: Path) -> Non
     assert [float(line[3]) for line in lines] == pytest.approx([0.84, 1.19, 1.62], abs=0.03)  # the planes' medians
     via_path = [f.name for f in StereoPipeline(known["path"]).stream(known["root"] / "rec")]
     assert via_path == known["names"]
+
+
+def test_the_known_depth_generator_shares_no_code_with_s2r() -> None:
+    import ast
+
+    tree = ast.parse((Path(__file__).resolve().parents[1] / "raycast.py").read_text())
+    imported = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
+                for alias in node.names}
+    imported |= {node.module.split(".")[0] for node in ast.walk(tree)
+                 if isinstance(node, ast.ImportFrom) and node.module}
+    assert imported <= {"__future__", "math", "dataclasses", "pathlib", "cv2", "numpy"}, imported
