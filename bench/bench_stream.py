@@ -122,13 +122,19 @@ def stream(bag: Path, out: Path) -> int:
     return count
 
 
+def match_only(bag: Path, _out: Path) -> int:
+    """The stream without a writer: decode, rectify and match (stereo_image_proc's own share of the work)."""
+    pipe = pipeline()
+    return sum(1 for _ in pipe.stream(open_recording(bag=bag, left_topic=LEFT, right_topic=RIGHT), workers=2))
+
+
 def timed(run: object, *args: Path) -> tuple[float, float, int]:
     cpu0, t0 = time.process_time(), time.perf_counter()
     n = run(*args)  # type: ignore[operator]
     return time.perf_counter() - t0, time.process_time() - cpu0, n
 
 
-def in_process(bag: Path, tmp: Path, rounds: int) -> float:
+def in_process(bag: Path, tmp: Path, rounds: int) -> None:
     walls: dict[str, list[float]] = {"plain": [], "stream": []}
     cpus: dict[str, list[float]] = {"plain": [], "stream": []}
     n = 0
@@ -142,7 +148,6 @@ def in_process(bag: Path, tmp: Path, rounds: int) -> float:
           f"({1e3 * statistics.median(cpus['plain']) / n:.1f} ms CPU/frame), stream {n / fast:5.1f} fps "
           f"({1e3 * statistics.median(cpus['stream']) / n:.1f} ms CPU/frame): x{plain / fast:.2f}  [{load()}]",
           flush=True)
-    return n / fast
 
 
 def child(argv: list[str]) -> tuple[float, float]:
@@ -173,7 +178,7 @@ def whole_process(bag: Path, tmp: Path, rounds: int, frames: int) -> None:
           f"s2r depth --to ros1 {cw:.2f} s ({cc:.2f} s CPU): x{pw / cw:.2f}  [{load()}]", flush=True)
 
 
-def ros_stereo_image_proc(bag: Path, tmp: Path, s2r_fps: float) -> None:
+def ros_stereo_image_proc(bag: Path, tmp: Path) -> None:
     if not Path("/usr/lib/stereo_image_proc/stereo_image_proc").exists():
         print("stereo_image_proc: not installed (make test-ros installs Debian's ROS 1); skipped")
         return
@@ -182,17 +187,28 @@ def ros_stereo_image_proc(bag: Path, tmp: Path, s2r_fps: float) -> None:
     params, notes = ros_disparity_params(pipeline().config)
     (tmp / "params.json").write_text(json.dumps(params))
     env = {k: v for k, v in os.environ.items() if not k.startswith(("ROS", "PYTHON"))}
+    fps: dict[str, list[float]] = {"bag": [], "match": []}
+
+    def s2r_runs() -> None:  # s2r just before and just after ROS, so both see the same load
+        for key, run in (("bag", stream), ("match", match_only)):
+            wall, _, n = timed(run, bag, tmp / "ros_cmp.bag")
+            fps[key].append(n / wall)
+
+    s2r_runs()
     done = subprocess.run(["/usr/bin/python3", str(HERE / "ros_stream_play.py"), str(bag), str(tmp / "params.json")],
                           env=env, capture_output=True, text=True, timeout=600, check=False)
+    s2r_runs()
     if done.returncode:
         print(f"stereo_image_proc: failed ({done.stderr.strip()[-300:]})")
         return
     got = json.loads(done.stdout)
     ros_fps = got["disparities"] / got["wall_s"] if got["wall_s"] > 0 else float("nan")
     node_ms = 1e3 * got["node_cpu_s"] / max(1, got["disparities"])
+    to_bag, matching = statistics.mean(fps["bag"]), statistics.mean(fps["match"])
     print(f"stereo_image_proc (rosbag play -r {got['rate']}, {got['offered']} pairs offered): {got['disparities']} "
-          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU {node_ms:.1f} ms/frame; s2r stream "
-          f"{s2r_fps:.1f} fps: ratio s2r / stereo_image_proc x{s2r_fps / ros_fps:.2f}  [{load()}]"
+          f"disparities in {got['wall_s']:.2f} s = {ros_fps:.1f} fps, node CPU {node_ms:.1f} ms/frame; s2r right "
+          f"before and after: stream into a bag {to_bag:.1f} fps (x{to_bag / ros_fps:.2f}), decode+match only "
+          f"{matching:.1f} fps (x{matching / ros_fps:.2f} stereo_image_proc)  [{load()}]"
           + (f" (parameter notes: {'; '.join(notes)})" if notes else ""), flush=True)
 
 
@@ -211,10 +227,10 @@ def main() -> None:
         tmp = Path(name)
         bag = tmp / "in.bag"
         write_input_bag(bag, args.frames)
-        fps = in_process(bag, tmp, args.rounds)
+        in_process(bag, tmp, args.rounds)
         whole_process(bag, tmp, args.rounds, args.frames)
         if not args.no_ros:
-            ros_stereo_image_proc(bag, tmp, fps)
+            ros_stereo_image_proc(bag, tmp)
 
 
 if __name__ == "__main__":
