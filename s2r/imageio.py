@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 from s2r.fileio import NotARegularFile, read_regular_file
 from s2r.limits import MAX_IMAGE_PX
 
-__all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "oversize_reason", "silence_opencv_log",
-           "size_mismatch_reason"]
+__all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "native_stderr_silenced", "oversize_reason",
+           "silence_opencv_log", "size_mismatch_reason"]
 
 _PNG_MAGIC, _JPEG_MAGIC = b"\x89PNG\r\n\x1a\n", b"\xff\xd8"
 #: A PNG chunk's length (big-endian, bytes of data) and type.
@@ -187,3 +187,7 @@ def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED, *,
         kind = "PNG" if data.startswith(_PNG_MAGIC) else "JPEG" if data.startswith(_JPEG_MAGIC) else ""
         return None, f"corrupt {kind} image data" if kind else "not an image file OpenCV can read"
     return np.asarray(image), ""
+
+
+#: The public name of the stderr guard: video decoders (FFmpeg through OpenCV) print to file descriptor 2 as well.
+native_stderr_silenced = _native_stderr_silenced

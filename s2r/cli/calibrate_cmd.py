@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
+from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import CalibrationError, terminal_safe
 from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
 from s2r.limits import MAX_SQUARE_M
@@ -25,9 +26,6 @@ def register(sub: Any) -> None:
         "calibrate", help="calibrate a stereo rig (or one camera) from chessboard images or a ROS bag",
         description="Chessboard calibration into a real s2r profile, with per-view errors, outliers, "
                     "standard deviations, coverage and an optional HTML report.")
-    p.add_argument("input", nargs="?", type=Path,
-                   help="folder with left/ and right/ (or cam0/ cam1/, image_0/ image_1/) subfolders, or "
-                        "with leftNN/rightNN image files")
     p.add_argument("--pattern", default=None,
                    help="chessboard inner corners COLSxROWS, e.g. 9x6 (required unless --target)")
     p.add_argument("--square", type=float, default=None,
@@ -53,13 +51,10 @@ def register(sub: Any) -> None:
     p.add_argument("--swap", action="store_true",
                    help="exchange left and right (when s2r finds the right camera to the left of the left one)")
     p.add_argument("--mono", action="store_true", help="calibrate one camera into a camera-only profile")
-    p.add_argument("--left", default=None, metavar="GLOB", help="left (or mono) images by glob")
-    p.add_argument("--right", default=None, metavar="GLOB", help="right images by glob")
-    p.add_argument("--bag", type=Path, default=None, help="ROS 1 bag or ROS 2 bag folder/file")
-    p.add_argument("--left-topic", default=None, help="left image topic in the bag")
-    p.add_argument("--right-topic", default=None, help="right image topic in the bag")
-    p.add_argument("--max-dt", type=float, default=0.01, help="pairing tolerance of bag stamps in s (0.01)")
-    p.add_argument("--every", type=int, default=1, help="use every N-th bag pair (default 1)")
+    add_recording_arguments(p, positional="input", what="chessboard views (--mono: --left GLOB or FOLDER)")
+    p.add_argument("--blur-ratio", type=float, default=0.35, metavar="R",
+                   help="video/stream inputs: skip a frame whose sharpness (variance of the Laplacian) is below R "
+                        "times the median of the frames before (default 0.35; 0 keeps the absolute floor only)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the corner cache")
     add_json(p)
     add_force(p)
@@ -119,13 +114,15 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not 0 < args.max_dt < float("inf"):
         raise CalibrationError(f"--max-dt must be positive seconds, got {args.max_dt}", field="--max-dt",
                                hint="e.g. --max-dt 0.01")
-    if args.every < 1:
-        raise CalibrationError(f"--every must be at least 1, got {args.every}", field="--every")
+    if not 0 <= args.blur_ratio < 1:
+        raise CalibrationError(f"must be in [0, 1), got {args.blur_ratio}", field="--blur-ratio", hint="e.g. 0.35")
     if args.max_error is not None and not 0 < args.max_error < float("inf"):
         raise CalibrationError("--max-error must be positive", field="--max-error", hint="e.g. --max-error 1.0")
     if args.bag is not None and (args.left_topic is None or args.right_topic is None) and not args.mono:
         raise CalibrationError("--bag needs --left-topic and --right-topic", field="--left-topic",
                                hint="list the bag's topics with `rosbags-info BAG`")
+    if not args.mono:
+        spec_from_args(args, positional="input").check(error=CalibrationError)
     return pattern
 
 
@@ -183,68 +180,88 @@ def _pm(value: float, sd: float | None, digits: int = 2) -> str:
         return f"{value:.{digits}f}±?"
     return f"{value:.{digits}f}±{sd:.2g}"
 def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, common: dict[str, Any]) -> Any:
-    """The calibration the arguments ask for: a ``--target``, ``--mono``, a bag, or stereo image pairs."""
-    result: Any
-    if target is not None:
-        result = _run_target(args, target, lens, common)
-    elif args.mono:
-        from s2r.calib.detect.inputs import find_mono_images
-        from s2r.calib.solve.mono import calibrate_mono
-
-        if args.bag is not None:
-            raise CalibrationError("--mono from a bag is not supported", field="--bag",
-                                   hint="export the images to a folder first")
-        result = calibrate_mono(find_mono_images(args.input, image_glob=args.left), **common)
-    elif args.bag is not None:
-        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
-
-        result = calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                      max_dt_s=args.max_dt, every=args.every,
-                                      fix_intrinsics=args.fix_intrinsics, swap=args.swap,
-                                      **common)
-    else:
-        from s2r.calib.detect.inputs import find_stereo_pairs
-        from s2r.calib.detect.pairs import PairDetection
-
-        pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
-        detection = PairDetection(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
-                                  swap=args.swap, pattern=pattern, jobs=args.jobs, cache_dir=common["cache_dir"],
-                                  progress=common["progress"])
-        try:  # the workers detect while the solver loads (about 0.2 s of a first run)
-            from s2r.calib.solve.stereo import calibrate_detected_pairs
-        except BaseException:
-            detection.cancel()
-            raise
-        solve = {k: v for k, v in common.items() if k not in ("pattern", "cache_dir")}
-        result = calibrate_detected_pairs(detection, fix_intrinsics=args.fix_intrinsics, **solve)
-    return result
-
-
-def _run_target(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
-    """Calibrate with corner ids (a target file, or a fisheye lens): mono, folder/glob pairs or a bag."""
-    kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
-    kw.update(target=target, lens=lens,
-              distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
+    """The calibration the arguments ask for: ``--mono`` (files), a bag, a video (any frame stream) or stereo image
+    files, each with the chessboard or the ``--target``."""
     if args.mono:
-        from s2r.calib.detect.inputs import find_mono_images
-        from s2r.calib.solve.target_mono import calibrate_mono_target
-
-        if args.bag is not None:
-            raise CalibrationError("--mono from a bag is not supported", field="--bag",
-                                   hint="export the images to a folder first")
-        return calibrate_mono_target(find_mono_images(args.input, image_glob=args.left), **kw)
-    if args.bag is not None:
+        return _run_mono(args, target, lens, common)
+    spec = spec_from_args(args, positional="input").check(error=CalibrationError)
+    kw = dict(common)
+    if target is not None:
+        kw = {k: v for k, v in common.items() if k not in ("square_m",)}
+        kw.update(target=target, lens=lens,
+                  distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
+    if spec.kind == "bag":
         from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
 
         return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
-                                    max_dt_s=args.max_dt, every=args.every, fix_intrinsics=args.fix_intrinsics,
-                                    swap=args.swap, **common, target=target, lens=lens)
+                                    max_dt_s=args.max_dt, every=args.every, max_frames=args.max_frames,
+                                    fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
+    if spec.kind in ("video", "videos"):
+        return _run_stream(args, spec, kw)
     from s2r.calib.detect.inputs import find_stereo_pairs
-    from s2r.calib.solve.target_stereo import calibrate_stereo_target
 
-    pairs = find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right)
-    return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+    pairs = _thinned(find_stereo_pairs(args.input, left_glob=args.left, right_glob=args.right), args)
+    if target is not None:
+        from s2r.calib.solve.target_stereo import calibrate_stereo_target
+
+        kw.pop("pattern")
+        return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                                       fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
+    from s2r.calib.detect.pairs import PairDetection
+
+    detection = PairDetection(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
+                              swap=args.swap, pattern=pattern, jobs=args.jobs, cache_dir=common["cache_dir"],
+                              progress=common["progress"])
+    try:  # the workers detect while the solver loads (about 0.2 s of a first run)
+        from s2r.calib.solve.stereo import calibrate_detected_pairs
+    except BaseException:
+        detection.cancel()
+        raise
+    solve = {k: v for k, v in common.items() if k not in ("pattern", "cache_dir")}
+    return calibrate_detected_pairs(detection, fix_intrinsics=args.fix_intrinsics, **solve)
+
+
+def _thinned(pairs: Any, args: argparse.Namespace) -> Any:
+    """``pairs`` (a PairSet) with ``--every`` / ``--max-frames`` applied."""
+    from dataclasses import replace
+
+    keep = slice(0, None if args.max_frames is None else args.max_frames * args.every, args.every)
+    return replace(pairs, left=pairs.left[keep], right=pairs.right[keep], names=pairs.names[keep])
+
+
+def _run_stream(args: argparse.Namespace, spec: Any, kw: dict[str, Any]) -> Any:
+    """Calibrate from a video (or two): frames streamed, blurred ones and still repeats counted, not kept."""
+    from s2r.calib.solve.stereo_stream import calibrate_stereo_stream
+    from s2r.fileio import sha256_file
+    from s2r.profile import SourceFile
+    from s2r.recordings import open_recording
+
+    source = open_recording(spec, grey=True, error=CalibrationError)
+    files = [spec.video] if spec.kind == "video" else [spec.left_video, spec.right_video]
+    hashed = [SourceFile(path=str(f), sha256=sha256_file(f)) for f in files]
+    return calibrate_stereo_stream(source, sources=hashed, blur_ratio=args.blur_ratio,
                                    fix_intrinsics=args.fix_intrinsics, swap=args.swap, **kw)
+
+
+def _run_mono(args: argparse.Namespace, target: Any, lens: str, common: dict[str, Any]) -> Any:
+    """Calibrate one camera from image files (a folder or ``--left GLOB``)."""
+    from s2r.calib.detect.inputs import find_mono_images
+
+    if any(getattr(args, k) is not None for k in ("bag", "video", "left_video", "right_video")):
+        raise CalibrationError("--mono reads image files only", field="--mono",
+                               hint="export the frames to a folder first, or give --left GLOB")
+    images = find_mono_images(args.input, image_glob=args.left)
+    images = images[:None if args.max_frames is None else args.max_frames * args.every:args.every]
+    if target is None:
+        from s2r.calib.solve.mono import calibrate_mono
+
+        return calibrate_mono(images, **common)
+    from s2r.calib.solve.target_mono import calibrate_mono_target
+
+    kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
+    kw.update(target=target, lens=lens,
+              distortion=DEFAULT_LENS if args.distortion == "equidistant" else args.distortion)
+    return calibrate_mono_target(images, **kw)
 
 
 def _print_summary(figures: dict[str, Any], out: Path) -> None:
@@ -278,12 +295,25 @@ def _print_summary(figures: dict[str, Any], out: Path) -> None:
         print("  held-out error by lens model: " + ", ".join(
             f"{m['model']}{'*' if m['chosen'] else ''} {m['heldout_px']:.3f}" for m in models["models"])
             + " px (* used)")
+    _print_frames(figures.get("frames"))
     for d in figures["dropped"]:
+        if figures.get("frames") and "consecutive frame(s)" in d["reason"]:
+            continue  # a still board's run of frames: counted on the frames line
         rms = "" if d.get("rms_px") is None else f" ({d['rms_px']:.3f} px)"
         print(f"  skipped {terminal_safe(d['name'])}{rms}: {terminal_safe(d['reason'])}")
     for g in figures.get("rejected_corner_groups") or []:
         print(f"  corners left out of {terminal_safe(g['name'])}: {g['left']} left, {g['right']} right "
               f"({terminal_safe(g['reason'])})")
+
+
+def _print_frames(frames: dict[str, Any] | None) -> None:
+    """A stream input's frame counts: read, used as views, and why the others were not kept."""
+    if not frames:
+        return
+    reasons = ", ".join(f"{n} {kind}" for kind, n in frames["not_kept"].items()) or "none"
+    print(f"  frames: {frames['read']} read, {frames['views_used']} used as views; not kept: {reasons} (repeat: a "
+          "still board, one view; blurred: variance of the Laplacian under the floor of 15 or under "
+          f"{frames['blur_ratio']:g} x the median of the frames before)")
 
 
 def _print_honest(figures: dict[str, Any]) -> None:

@@ -15,16 +15,20 @@ from pathlib import Path
 from typing import Any
 
 from s2r.cli._common import ProgressBar, add_force, add_json, load_profile, print_json, to_jsonable
+from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import CheckError
 
 __all__ = ["register"]
 
 
-def _add_settings(parser: argparse.ArgumentParser) -> None:
+_MAX_FRAMES_HELP = "pairs used, spread over the recording (default 20)"
+
+
+def _add_settings(parser: argparse.ArgumentParser, *, max_frames: bool = True) -> None:
     parser.add_argument("--tolerance", type=float, default=0.05, metavar="DEG",
                         help="rotation drift tolerated per axis, degrees (default 0.05)")
-    parser.add_argument("--max-frames", type=int, default=20, metavar="N",
-                        help="pairs used, spread over the recording (default 20)")
+    if max_frames:
+        parser.add_argument("--max-frames", type=int, default=20, metavar="N", help=_MAX_FRAMES_HELP)
 
 
 def register(sub: Any) -> None:
@@ -35,13 +39,8 @@ def register(sub: Any) -> None:
         "error that explains their vertical disparity. Verdict good / drifted / cannot tell; --fix writes the "
         "profile with the rotation re-estimated. Exit 0 good, 1 drifted or cannot tell, 2 bad input.")
     p.add_argument("profile", help="profile name or path")
-    p.add_argument("recording", nargs="?", type=Path, help="folder of pairs (left/ + right/, or leftNN/rightNN)")
-    p.add_argument("--left", metavar="GLOB", help="left images glob (with --right) instead of a folder")
-    p.add_argument("--right", metavar="GLOB", help="right images glob")
-    p.add_argument("--bag", type=Path, help="ROS 1 .bag or ROS 2 bag folder instead of a folder")
-    p.add_argument("--left-topic", help="--bag: left image topic")
-    p.add_argument("--right-topic", help="--bag: right image topic")
-    _add_settings(p)
+    add_recording_arguments(p, max_frames_default=20, max_frames_help=_MAX_FRAMES_HELP, what="ordinary stereo pairs")
+    _add_settings(p, max_frames=False)
     p.add_argument("--report", type=Path, metavar="DIR", help="write DIR/check.html")
     p.add_argument("--fix", action="store_true", help="write the corrected profile to -o")
     p.add_argument("-o", "--output", type=Path, help="--fix: corrected profile YAML to write")
@@ -80,12 +79,11 @@ def _settings(args: argparse.Namespace) -> Any:
 def _source(args: argparse.Namespace) -> Any:
     from s2r.drift.source import StereoSource
 
-    given = [x is not None for x in (args.recording, args.left or args.right, args.bag)]
-    if sum(given) != 1:
-        raise CheckError("give one recording: a FOLDER, --left/--right globs, or --bag", field="RECORDING",
-                         hint="e.g. s2r check real.yaml logs/run1/")
-    return StereoSource(folder=args.recording, left_glob=args.left, right_glob=args.right, bag=args.bag,
-                        left_topic=args.left_topic, right_topic=args.right_topic, max_frames=args.max_frames)
+    spec = spec_from_args(args, max_frames=False).check(error=CheckError)
+    return StereoSource(folder=spec.folder, left_glob=spec.left_glob, right_glob=spec.right_glob, bag=spec.bag,
+                        left_topic=spec.left_topic, right_topic=spec.right_topic, max_frames=args.max_frames,
+                        video=spec.video, layout=spec.layout, left_video=spec.left_video, right_video=spec.right_video,
+                        every=spec.every, max_dt_s=spec.max_dt_s)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

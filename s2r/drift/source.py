@@ -1,8 +1,9 @@
-"""Where a drift check's ordinary stereo pairs come from: a folder, two globs, or a bag and two topics.
+"""Where a drift check's ordinary stereo pairs come from: any recording input (:mod:`s2r.recordings`): a folder, two
+globs, a bag and two topics, one side-by-side / top-bottom video, or two videos.
 
-The same layouts ``s2r calibrate`` reads (``left/`` + ``right/``, ``leftNN``/``rightNN`` files, globs paired by
-number, ROS 1 or ROS 2 bags paired by stamp). At most ``max_frames`` pairs are used, spread evenly over the
-recording, and every image is read through s2r's bounded image reader.
+The same layouts ``s2r calibrate`` reads. At most ``max_frames`` pairs are used, spread evenly over the recording
+(files: only those are decoded; streams: every ``every``-th frame is read and the kept ones thinned as it goes, so
+memory stays bounded), and every image's declared size is checked against the profile before it is decoded.
 """
 
 from __future__ import annotations
@@ -10,15 +11,15 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib import find_stereo_pairs
-from s2r.errors import CalibrationError, CheckError
-from s2r.imageio import decode_image_file
+from s2r.errors import CheckError
 from s2r.profile import StereoProfile
+from s2r.recordings import RecordingSpec, open_recording
+from s2r.recordings.files import FileFrames
 
 __all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs"]
 
@@ -29,7 +30,8 @@ Sizes = tuple[tuple[int, int], tuple[int, int]] | None
 
 @dataclass(frozen=True)
 class StereoSource:
-    """One recording: ``folder``, or ``left_glob`` + ``right_glob``, or ``bag`` + ``left_topic`` + ``right_topic``."""
+    """One recording: ``folder``, or ``left_glob`` + ``right_glob``, or ``bag`` + ``left_topic`` + ``right_topic``, or
+    ``video`` (+ ``layout``), or ``left_video`` + ``right_video``; ``every``-th frame, ``max_frames`` spread."""
 
     folder: Path | None = None
     left_glob: str | None = None
@@ -38,6 +40,19 @@ class StereoSource:
     left_topic: str | None = None
     right_topic: str | None = None
     max_frames: int = 20
+    video: Path | None = None
+    layout: str = "sbs"
+    left_video: Path | None = None
+    right_video: Path | None = None
+    every: int = 1
+    max_dt_s: float = 0.01
+
+    def spec(self) -> RecordingSpec:
+        """The recording as a :class:`~s2r.recordings.RecordingSpec` (all frames: the spread is this module's)."""
+        return RecordingSpec(folder=self.folder, left_glob=self.left_glob, right_glob=self.right_glob, bag=self.bag,
+                             left_topic=self.left_topic, right_topic=self.right_topic, max_dt_s=self.max_dt_s,
+                             video=self.video, layout=self.layout, left_video=self.left_video,
+                             right_video=self.right_video, every=self.every)
 
     def describe(self) -> str:
         """The recording in one phrase, for reports."""
@@ -45,7 +60,9 @@ class StereoSource:
             return f"{self.bag} ({self.left_topic}, {self.right_topic})"
         if self.folder is not None:
             return str(self.folder)
-        return f"{self.left_glob} + {self.right_glob}"
+        if self.left_glob is not None or self.right_glob is not None:
+            return f"{self.left_glob} + {self.right_glob}"
+        return self.spec().describe()
 
 
 def _spread(count: int, limit: int) -> list[int]:
@@ -55,39 +72,9 @@ def _spread(count: int, limit: int) -> list[int]:
     return sorted({round(k * (count - 1) / (limit - 1)) for k in range(limit)})
 
 
-def _check_size(image: NDArray[np.uint8], size: tuple[int, int] | None, where: str | Path, side: str) -> None:
-    if size is not None and image.shape[:2] != (size[1], size[0]):
-        raise CheckError(f"{side} image is {image.shape[1]}x{image.shape[0]} px but the profile's {side} camera "
-                         f"is {size[0]}x{size[1]}", path=where, field="image size",
-                         hint="check the recording with the profile of the camera that took it")
-
-
-def _grey(path: Path, size: tuple[int, int] | None, side: str) -> NDArray[np.uint8]:
-    image, reason = decode_image_file(path, cv2.IMREAD_GRAYSCALE)
-    if image is None:
-        raise CheckError(reason, path=path, hint="pass readable image files")
-    _check_size(image, size, path, side)
-    return np.asarray(image, np.uint8)
-
-
-def _folder_pairs(source: StereoSource, sizes: Sizes) -> Iterator[GreyPair]:
-    try:
-        pairs = find_stereo_pairs(source.folder, left_glob=source.left_glob, right_glob=source.right_glob)
-    except CalibrationError as exc:  # the same finder as calibrate; its message names the folder or glob
-        raise CheckError(exc.message, path=exc.path, field=exc.field, hint=exc.hint) from None
-    if not pairs.names:
-        unpaired = f"; unpaired: {', '.join(p.name for p in pairs.unpaired[:3])}" if pairs.unpaired else ""
-        raise CheckError(f"no left/right image pairs (regular image files) found{unpaired}",
-                         path=source.describe(), hint="give each left image a right partner with the same number")
-    left_size, right_size = sizes if sizes is not None else (None, None)
-    for k in _spread(len(pairs.names), source.max_frames):
-        yield (pairs.names[k], _grey(pairs.left[k], left_size, "left"),
-               _grey(pairs.right[k], right_size, "right"))
-
-
 def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
     """Every ``step``-th frame, ``step`` doubling whenever more than ``2 * limit`` are held: memory stays
-    bounded on a long bag and the kept frames still span all of it."""
+    bounded on a long recording and the kept frames still span all of it."""
     kept: list[GreyPair] = []
     step = 1
     for k, frame in enumerate(frames):
@@ -99,47 +86,29 @@ def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
     return kept
 
 
-def _bag_pairs(source: StereoSource, sizes: Sizes) -> Iterator[GreyPair]:
-    from s2r.calib.detect.bags import open_bag, paired_bag_frames
-
-    assert source.bag is not None
-    if not source.left_topic or not source.right_topic:
-        raise CheckError("a bag needs both image topics", path=source.bag, field="--left-topic/--right-topic",
-                         hint="pass --left-topic and --right-topic")
-    reader = open_bag(source.bag, error=CheckError)
-    try:
-        names = {c.topic for c in reader.connections}
-        for topic in (source.left_topic, source.right_topic):
-            if topic not in names:
-                raise CheckError(f"no topic {topic}", path=source.bag, field="topic",
-                                 hint=f"image topics here: {', '.join(sorted(names)) or 'none'}")
-        frames = _decimated(((f"{left.stamp_s:.3f}", left.image, right.image)
-                             for left, right in paired_bag_frames(reader, source.left_topic, source.right_topic)),
-                            source.max_frames)
-    finally:
-        reader.close()
-    if not frames:
-        raise CheckError("no stereo pairs on these topics", path=source.bag, field="topic",
-                         hint="check --left-topic and --right-topic")
-    for k in _spread(len(frames), source.max_frames):
-        name, left, right = frames[k]
-        for side, image, size in zip(("left", "right"), (left, right), sizes or (None, None), strict=True):
-            _check_size(image, size, f"{source.bag} @ {name} s", side)
-        yield frames[k]
-
-
 def read_pairs(source: StereoSource, *, sizes: Sizes = None) -> Iterator[GreyPair]:
     """``(name, left, right)`` grey (H, W) uint8 pairs of the recording, at most ``max_frames`` of them.
 
     Args:
-        sizes: the profile's ``((w, h) left, (w, h) right)`` px: an image of another size is a CheckError naming
-            its file (or bag and stamp), not a meaningless fit.
+        sizes: the profile's ``((w, h) left, (w, h) right)`` px: an image declaring another size is a CheckError
+            naming its file (or bag topic and stamp, or video), before it is decoded.
     """
     if source.max_frames < 1:
         raise CheckError(f"must be at least 1, got {source.max_frames}", field="--max-frames", hint="e.g. 20")
-    if source.bag is not None:
-        return _bag_pairs(source, sizes)
-    return _folder_pairs(source, sizes)
+    recording = open_recording(source.spec(), expected_size=sizes, grey=True, error=CheckError)
+    if isinstance(recording, FileFrames):
+        recording.indices = tuple(_spread(len(recording), source.max_frames))
+        return ((f.name, f.left, f.right) for f in recording.frames())
+    return _spread_stream(recording.frames(), source)
+
+
+def _spread_stream(frames: Iterator[Any], source: StereoSource) -> Iterator[GreyPair]:
+    kept = _decimated(((f.name, f.left, f.right) for f in frames), source.max_frames)
+    if not kept:
+        raise CheckError("no stereo pairs in the recording", path=source.describe(),
+                         hint="check --left-topic and --right-topic (bags) or the video")
+    for k in _spread(len(kept), source.max_frames):
+        yield kept[k]
 
 
 def profile_sizes(profile: StereoProfile) -> Sizes:

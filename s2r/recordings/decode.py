@@ -57,7 +57,7 @@ class SizeRule:
             return f"{side} image is {width}x{height} px but the profile's {side} camera is {want[0]}x{want[1]}"
         return ""
 
-    def check(self, width: int, height: int, side: str, *, where: str, field: str | None = None) -> None:
+    def check(self, width: int, height: int, side: str, *, where: str, field: str | None = "image size") -> None:
         """Raise the rule's error naming ``where`` when :meth:`problem` finds one."""
         if reason := self.problem(width, height, side):
             raise self.error(reason, path=where, field=field,

@@ -26,8 +26,10 @@ def decode_side(path: Path, rule: SizeRule, side: str, *, grey: bool) -> NDArray
     image, reason = decode_image_file(path, cv2.IMREAD_GRAYSCALE if grey else cv2.IMREAD_UNCHANGED,
                                       expected_size=rule.side(side))
     if image is None:
-        raise rule.error(f"{side} image: {reason}", path=path,
-                         hint="pass readable image files of the profile's camera size")
+        size = reason.startswith("the header declares")  # oversize or not the expected size: refused undecoded
+        raise rule.error(f"{side} image: {reason}", path=path, field="image size" if size else None,
+                         hint="check the recording with the profile of the camera that took it" if size else
+                         "pass readable image files")
     rule.check(int(image.shape[1]), int(image.shape[0]), side, where=str(path))
     return to_uint8(image, grey=grey)
 
@@ -46,6 +48,8 @@ class FileFrames:
     grey: bool = False
     every: int = 1
     max_frames: int | None = None
+    #: Positions (after ``every`` / ``max_frames``) to decode, in order; None: all of them.
+    indices: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         self.pairs = self._find()
@@ -76,7 +80,8 @@ class FileFrames:
 
     def frames(self) -> Iterator[StereoFrame]:
         """Decoded pairs in pairing order (by the number in the names), one at a time."""
-        for k in range(0, len(self.pairs.names), self.every)[:len(self)]:
+        positions = range(0, len(self.pairs.names), self.every)[:len(self)]
+        for k in positions if self.indices is None else [positions[i] for i in self.indices]:
             lp, rp = self.pairs.left[k], self.pairs.right[k]
             yield StereoFrame(index=k, name=self.pairs.names[k], stamp_ns=None, frame_id="",
                               left=decode_side(lp, self.rule, "left", grey=self.grey),

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import S2RError
+from s2r.imageio import native_stderr_silenced
 from s2r.recordings.decode import SizeRule, to_uint8
 from s2r.recordings.frames import StereoFrame
 
@@ -52,7 +53,8 @@ class _Capture:
                         path=self.path, field=option, hint=_HINT)
         if info.st_size == 0:
             raise error("the video file is empty", path=self.path, field=option, hint=_HINT)
-        self.cap = cv2.VideoCapture(str(self.path), cv2.CAP_FFMPEG)
+        with native_stderr_silenced():  # FFmpeg's own lines ("moov atom not found"): s2r says it in one line
+            self.cap = cv2.VideoCapture(str(self.path), cv2.CAP_FFMPEG)
         if not self.cap.isOpened():
             self.cap.release()
             raise error("cannot open the video (not a video, or truncated before its index)", path=self.path,
@@ -73,8 +75,9 @@ class _Capture:
     def grab(self, read: int) -> bool:
         """Advance one frame; False at the end. An end before the declared count (less one, as containers round
         it) raises the error naming the truncation; a video without any frame is refused as empty."""
-        if self.cap.grab():
-            return True
+        with native_stderr_silenced():
+            if self.cap.grab():
+                return True
         if read == 0:
             raise self.error("the video holds no frames", path=self.path, field=self.option, hint=_HINT)
         if self.count and read < self.count - 1:
@@ -84,7 +87,8 @@ class _Capture:
 
     def retrieve(self, index: int) -> NDArray[Any]:
         """The frame last grabbed (BGR or grey), which must have the declared size."""
-        ok, frame = self.cap.retrieve()
+        with native_stderr_silenced():
+            ok, frame = self.cap.retrieve()
         if not ok or frame is None:
             raise self.error(f"frame {index} cannot be decoded", path=self.path, field=self.option,
                              hint="the video is damaged")
@@ -187,16 +191,16 @@ class TwoVideoFrames:
             self.rule.check(left.width, left.height, "left", where=str(self.left_video), field="--left-video")
             self.rule.check(right.width, right.height, "right", where=str(self.right_video), field="--right-video")
             if left.count and right.count and left.count != right.count:
-                raise self._mismatch(left.count, right.count)
+                raise self._mismatch(f"the left video has {left.count} frames but the right one {right.count}")
         except BaseException:
             left.release()
             right.release()
             raise
         return left, right
 
-    def _mismatch(self, n_left: int, n_right: int) -> S2RError:
-        return self.rule.error(f"the left video has {n_left} frames but the right one {n_right}: they cannot be "
-                               "paired by frame index", path=f"{self.left_video} + {self.right_video}",
+    def _mismatch(self, counts: str) -> S2RError:
+        return self.rule.error(f"{counts}: they cannot be paired by frame index",
+                               path=f"{self.left_video} + {self.right_video}",
                                field="--left-video/--right-video", hint="pass two recordings of the same frames")
 
     def describe(self) -> str:
@@ -211,7 +215,8 @@ class TwoVideoFrames:
             while self.max_frames is None or kept < self.max_frames:
                 more_left, more_right = left.grab(index), right.grab(index)
                 if more_left != more_right:
-                    raise self._mismatch(index + more_left, index + more_right)
+                    short, other = ("left", "right") if more_right else ("right", "left")
+                    raise self._mismatch(f"the {short} video ends after {index} frames but the {other} one has more")
                 if not more_left:
                     return
                 if index % self.every == 0:

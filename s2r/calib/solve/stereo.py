@@ -112,6 +112,7 @@ class StereoCalibration:
     board: str = ""
     projection: dict[str, dict[str, ProjectionMap | None]] = field(default_factory=dict, repr=False)
     board_warp: dict[str, Any] | None = None
+    frames: dict[str, Any] | None = None
 
     def figures(self) -> dict[str, Any]:
         """The calibration figures as plain JSON-ready values (what ``--json`` prints)."""
@@ -147,6 +148,7 @@ class StereoCalibration:
             "stereo_heldout": None if self.heldout is None else self.heldout.as_dict(),
             "projection_uncertainty": {side: {src: None if m is None else m.as_dict() for src, m in maps.items()}
                                        for side, maps in self.projection.items()},
+            "frames": self.frames,
         }
 
 

@@ -1,4 +1,4 @@
-"""Stereo calibration from ROS bags: the image pairs of :mod:`s2r.calib.detect.bags` streamed to the detector
+"""Stereo calibration from ROS bags: the image pairs of :mod:`s2r.recordings.bags` streamed to the detector
 (the corner cache keyed by the sha256 of each message's serialized bytes), then the stereo solve.
 """
 
@@ -8,20 +8,21 @@ import os
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
-from s2r.calib.detect.bagfiles import bag_storage_files
-from s2r.calib.detect.bags import bag_image_topics, open_bag, paired_bag_frames
 from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
+from s2r.recordings.bagfiles import bag_storage_files
+from s2r.recordings.bags import grey_of
+from s2r.recordings.bagsource import BagFrames
+from s2r.recordings.decode import SizeRule
 from s2r.targets import AnyTarget
 
 __all__ = ["calibrate_stereo_bag"]
@@ -34,19 +35,9 @@ def _bag_sources(bag: Path) -> list[SourceFile]:
     return [SourceFile(path=str(p), sha256=sha256_file(p)) for p in bag_storage_files(bag, error=CalibrationError)]
 
 
-def _check_topics(reader: Any, bag: Path, left_topic: str, right_topic: str) -> int:
-    topics = bag_image_topics(reader)
-    for flag, topic in (("--left-topic", left_topic), ("--right-topic", right_topic)):
-        if topic not in topics:
-            listed = ", ".join(topics) if topics else "none"
-            raise CalibrationError(f"no image topic {topic!r} in the bag; its image topics: {listed}", path=bag,
-                                   field=flag, hint="pass one of the listed topics")
-    counts = {t: int(sum(c.msgcount for c in reader.connections if c.topic == t)) for t in (left_topic, right_topic)}
-    return min(counts.values())
-
-
 def calibrate_stereo_bag(
     bag: Path, *, left_topic: str, right_topic: str, max_dt_s: float = 0.01, every: int = 1,
+    max_frames: int | None = None,
     pattern: tuple[int, int] = (9, 6), square_m: float = 0.025, name: str = "calibrated",
     distortion: str = DEFAULT_LENS, max_error_px: float | None = None, fix_intrinsics: bool = False,
     swap: bool = False,
@@ -61,27 +52,26 @@ def calibrate_stereo_bag(
         no pairs within ``max_dt_s``, or the usual calibration input errors.
     """
     bag = Path(bag)
-    reader = open_bag(bag)
+    frames = BagFrames(bag, left_topic, right_topic, rule=SizeRule(error=CalibrationError), grey=True, every=every,
+                       max_frames=max_frames, max_dt_s=max_dt_s)
+    n_max = frames.message_count() // every
     samples: dict[str, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = {}
     names: list[str] = []
-    try:
-        n_max = _check_topics(reader, bag, left_topic, right_topic)
 
-        def items() -> Iterator[DetectItem]:
-            for i, (fl, fr) in enumerate(paired_bag_frames(reader, left_topic, right_topic, max_dt_s=max_dt_s,
-                                                           every=every)):
-                label = f"pair{i:05d}@{fl.stamp_s:.3f}s"
-                names.append(label)
-                if len(samples) < _SAMPLES:
-                    samples[label] = (fl.image, fr.image)
-                yield DetectItem(name=f"{left_topic}@{fl.stamp_s:.3f}", sha256=fl.sha256, source=fl.image)
-                yield DetectItem(name=f"{right_topic}@{fr.stamp_s:.3f}", sha256=fr.sha256, source=fr.image)
+    def items() -> Iterator[DetectItem]:
+        for i, (_index, ml, mr) in enumerate(frames.messages()):
+            fl, fr = grey_of(ml, error=CalibrationError), grey_of(mr, side="right", error=CalibrationError)
+            label = f"pair{i:05d}@{ml.stamp_ns * 1e-9:.3f}s"
+            names.append(label)
+            if len(samples) < _SAMPLES:
+                samples[label] = (fl, fr)
+            yield DetectItem(name=f"{left_topic}@{ml.stamp_ns * 1e-9:.3f}", sha256=ml.sha256, source=fl)
+            yield DetectItem(name=f"{right_topic}@{mr.stamp_ns * 1e-9:.3f}", sha256=mr.sha256, source=fr)
 
-        cache = CornerCache(cache_dir, target) if cache_dir is not None else None
-        dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
-                                  total=2 * max(1, n_max // every), progress=progress, target=target))
-    finally:
-        reader.close()
+    cache = CornerCache(cache_dir, target) if cache_dir is not None else None
+    total = max(1, n_max if max_frames is None else min(n_max, max_frames))
+    dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
+                              total=2 * total, progress=progress, target=target))
     if not names:
         raise CalibrationError(f"no {left_topic} / {right_topic} messages with stamps within {max_dt_s} s",
                                path=bag, field="--max-dt", hint="raise --max-dt or check the topics")
