@@ -11,7 +11,13 @@ import numpy as np
 
 from s2r.cli._common import ProgressBar, add_force, add_json, print_json
 from s2r.cli._recording import add_recording_arguments
-from s2r.cli.depth_stream_cmd import add_stream_arguments, recording_given, run_stream, split_inputs
+from s2r.cli.depth_stream_cmd import (
+    add_stream_arguments,
+    check_target_options,
+    recording_given,
+    run_stream,
+    split_inputs,
+)
 from s2r.depth.names import PRESETS, STAGES
 from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, check_output_dir, check_output_free, prepare_output_dir
@@ -75,7 +81,7 @@ def register(sub: Any) -> None:
     parser.add_argument("--left-dir", type=Path, help="folder of left images (the NN_* sequence layout)")
     parser.add_argument("--right-dir", type=Path, help="folder of right images, paired by sorted names")
     add_recording_arguments(parser, positional=None)
-    parser.add_argument("--workers", type=int, default=2, help="compute threads in sequence mode (default 2)")
+    parser.add_argument("--workers", type=int, default=2, help="matching threads, sequences and recordings (default 2)")
     add_force(parser)
     add_json(parser)
     parser.set_defaults(func=_cmd_depth)
@@ -119,6 +125,7 @@ def _given_profile(args: argparse.Namespace) -> Any:
 
 def _cmd_depth(args: argparse.Namespace) -> int:
     split_inputs(args)
+    check_target_options(args)
     sequence = args.left_dir is not None or args.right_dir is not None
     stream = recording_given(args)
     if sequence and (args.left_dir is None or args.right_dir is None):
@@ -148,6 +155,10 @@ def _cmd_depth(args: argparse.Namespace) -> int:
                          hint="drop --fov, or use --alpha to keep more of a pinhole image")
     if stream or args.to != "files":
         return run_stream(args, pipeline)
+    if args.pcd:  # the older layouts have no PCD; the option must not vanish silently
+        raise DepthError("writes points/NAME.pcd of a recording's frames", field="--pcd",
+                         hint="give the pair as a recording (PROFILE FOLDER or --left/--right), or use --ply")
+    args.ply = args.ply or args.points
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 
 

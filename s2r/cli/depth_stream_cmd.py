@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
     from s2r.depth.stream import DepthFrame
 
-__all__ = ["add_stream_arguments", "recording_given", "run_stream", "split_inputs"]
+__all__ = ["add_stream_arguments", "check_target_options", "recording_given", "run_stream", "split_inputs"]
 
 log = logging.getLogger(__name__)
 
@@ -85,13 +85,18 @@ def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, st
     return source.frames(), source.describe()
 
 
-def _check_options(args: argparse.Namespace) -> None:
+def check_target_options(args: argparse.Namespace) -> None:
+    """Refuse an option of another ``--to`` target: it would be ignored."""
     files = args.to == "files"
     misplaced = ([("--pcd", args.pcd), ("--ply", args.ply)] if not files else
                  [("--depth-encoding", args.depth_encoding != "32FC1"), ("--namespace", args.namespace != "/stereo")])
     for option, given in misplaced:
         if given:
             raise DepthError(f"does not apply to --to {args.to}", field=option, hint=f"drop {option}")
+
+
+def _check_output(args: argparse.Namespace) -> None:
+    """Refuse an output that is the input folder."""
     folder = args.recording
     if folder is not None and args.output.resolve() == Path(folder).resolve():
         raise DepthError("the output is the input folder", path=args.output, field="--output",
@@ -102,7 +107,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     """Stream the input through the pipeline into the ``--to`` writer; publish whole; print a summary."""
     from s2r.depth.writers import StreamOptions, open_writer, write_stream
 
-    _check_options(args)
+    _check_output(args)
     options = StreamOptions(namespace=args.namespace, depth_encoding=args.depth_encoding,
                             points=args.points or args.ply, pcd=args.pcd, colour_range_m=args.colour_range)
     m = pipeline.profile.matcher

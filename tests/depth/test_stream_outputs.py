@@ -112,3 +112,8 @@ def test_one_pair_into_a_bag_and_the_older_order(rec: tuple[Path, Path], tmp_pat
     assert main(["-q", "depth", str(profile), str(left), str(right), "-o", str(tmp_path / "e")]) == 0
     assert (np.load(tmp_path / "d" / "disparity.npy").tobytes() ==
             np.load(tmp_path / "e" / "disparity.npy").tobytes())
+    assert main(["-q", "depth", str(profile), str(left), str(right), "-o", str(tmp_path / "f"), "--pcd"]) == 2
+    assert main(["-q", "depth", str(profile), str(left), str(right), "-o", str(tmp_path / "f"), "--namespace",
+                 "/x"]) == 2
+    assert main(["-q", "depth", str(profile), str(left), str(right), "-o", str(tmp_path / "f"), "--points"]) == 0
+    assert (tmp_path / "f" / "points.ply").is_file()
