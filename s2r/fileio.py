@@ -247,6 +247,31 @@ class OutputBatch:
         self._names.add(out)
         return out
 
+    def add_file(self, path: str | Path, source: str | Path) -> Path:
+        """Stage the finished file ``source`` for ``path`` (a file a library wrote by name, such as a bag): it is
+        moved beside ``path`` now (same filesystem; synced unless ``durable`` is False) and published with the
+        rest. ``source`` must be a regular file the caller owns; it is gone afterwards."""
+        import tempfile
+
+        out = self._check(path)
+        if out in self._names:
+            raise ValueError(f"{out} is staged twice")
+        tmp_name = ""
+        try:
+            if self.durable:
+                with open(source, "rb") as handle:
+                    os.fsync(handle.fileno())
+            fd, tmp_name = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".tmp", dir=out.parent)
+            os.close(fd)
+            os.replace(source, tmp_name)
+        except OSError as exc:
+            if tmp_name:
+                Path(tmp_name).unlink(missing_ok=True)
+            raise _cannot_write(out, exc) from None
+        self._staged.append((tmp_name, out))
+        self._names.add(out)
+        return out
+
     def add_text(self, path: str | Path, text: str) -> Path:
         """UTF-8 text version of :meth:`add_bytes`."""
         return self.add_bytes(path, text.encode("utf-8"))

@@ -10,6 +10,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.cli._recording import add_recording_arguments
+from s2r.cli.depth_stream_cmd import (
+    add_stream_arguments,
+    check_target_options,
+    recording_given,
+    run_stream,
+    split_inputs,
+)
 from s2r.depth.names import PRESETS, STAGES
 from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, check_output_dir, check_output_free, prepare_output_dir
@@ -30,15 +38,19 @@ def register(sub: Any) -> None:
     """Add ``s2r depth``."""
     parser = sub.add_parser(
         "depth", help="depth maps from stereo pairs",
-        description="Rectify with a profile, match with a preset, and write disparity.npy (float32 px, NaN "
-        "invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET with a colour bar in metres), "
-        "camera_info.yaml (ROS camera_info of the rectified left camera, the frame of every output) and "
-        "optionally points.ply. Depth outside the profile's matcher.min_depth_m..max_depth_m is invalid unless "
-        "--keep-out-of-range.")
-    parser.add_argument("left", nargs="?", type=Path, help="left image (single-pair mode)")
-    parser.add_argument("right", nargs="?", type=Path, help="right image (single-pair mode)")
-    parser.add_argument("--profile", help="profile name or YAML path (default: $S2R_PROFILE)")
-    parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
+        description="Rectify with a profile, match with a preset, and write depth. One pair (PROFILE LEFT RIGHT): "
+        "disparity.npy (float32 px, NaN invalid), depth.png (uint16 mm, 0 invalid), depth_color.png (JET with a colour "
+        "bar in metres), camera_info.yaml (ROS camera_info of the rectified left camera, the frame of every output) "
+        "and optionally points.ply. A recording (PROFILE FOLDER, or --bag/--video/--left ...) is streamed into "
+        "--to files (per-frame files named after the input frames, frames.csv), ros2 (a ROS 2 mcap bag folder) or "
+        "ros1 (a .bag), published whole. Depth outside the profile's matcher.min_depth_m..max_depth_m is invalid "
+        "unless --keep-out-of-range.")
+    parser.add_argument("inputs", nargs="*", metavar="PROFILE [LEFT RIGHT | FOLDER]",
+                        help="the profile (name or YAML path; default $S2R_PROFILE), then one pair of images or a "
+                        "recording FOLDER (or give the recording with the options below)")
+    parser.add_argument("--profile", help="the profile, as an option (then the positionals are the inputs)")
+    parser.add_argument("-o", "--output", type=Path, required=True,
+                        help="output folder (--to files, ros2: a ROS 2 bag folder) or file (--to ros1: a .bag)")
     parser.add_argument("--preset", default="profile", choices=PRESETS, help="matcher preset (default: profile)")
     parser.add_argument("--num-disparities", type=int, help="disparity range in px (multiple of 16)")
     parser.add_argument("--postprocess", help=f"comma-separated stages from {','.join(STAGES)} ('' for none); "
@@ -51,6 +63,7 @@ def register(sub: Any) -> None:
                         "(default: OpenCV's, at most 90)")
     parser.add_argument("--resize", action="store_true", help="accept other image sizes by rescaling intrinsics")
     parser.add_argument("--ply", action="store_true", help="also write a coloured point cloud (points.ply)")
+    add_stream_arguments(parser)
     parser.add_argument("--keep-out-of-range", action="store_true",
                         help="keep depths outside the profile's min_depth_m..max_depth_m (default: invalid, 0)")
     parser.add_argument("--range", metavar="NEAR,FAR", dest="colour_range",
@@ -65,9 +78,10 @@ def register(sub: Any) -> None:
     given.add_argument("--cy", type=float, metavar="PX", help="--rectified: principal point y, pixels")
     given.add_argument("--doffs", type=float, default=0.0, metavar="PX",
                        help="--rectified: right cx minus left cx, pixels (Middlebury's doffs; default 0)")
-    parser.add_argument("--left-dir", type=Path, help="folder of left images (sequence mode)")
+    parser.add_argument("--left-dir", type=Path, help="folder of left images (the NN_* sequence layout)")
     parser.add_argument("--right-dir", type=Path, help="folder of right images, paired by sorted names")
-    parser.add_argument("--workers", type=int, default=2, help="compute threads in sequence mode (default 2)")
+    add_recording_arguments(parser, positional=None)
+    parser.add_argument("--workers", type=int, default=2, help="matching threads, sequences and recordings (default 2)")
     add_force(parser)
     add_json(parser)
     parser.set_defaults(func=_cmd_depth)
@@ -103,22 +117,29 @@ def _given_profile(args: argparse.Namespace) -> Any:
                           ("--alpha", args.alpha)):
         if given is not None:
             raise DepthError("does not apply to already-rectified pairs", field=option, hint=f"drop {option}")
-    first = args.left if args.left is not None else pair_images(args.left_dir, args.right_dir)[0][0]
+    first = args.pair_left if args.pair_left is not None else pair_images(args.left_dir, args.right_dir)[0][0]
     shape = read_image(first).shape
     return rectified_profile((shape[1], shape[0]), f_px=args.f, baseline_m=args.baseline, cx_px=args.cx,
                              cy_px=args.cy, doffs_px=args.doffs)
 
 
 def _cmd_depth(args: argparse.Namespace) -> int:
+    split_inputs(args)
+    check_target_options(args)
     sequence = args.left_dir is not None or args.right_dir is not None
+    stream = recording_given(args)
     if sequence and (args.left_dir is None or args.right_dir is None):
         raise DepthError("sequence mode needs both folders", field="--left-dir/--right-dir",
                          hint="pass --left-dir and --right-dir")
-    if sequence and (args.left or args.right):
-        raise DepthError("give either LEFT RIGHT images or --left-dir/--right-dir, not both", field="LEFT",
-                         hint="drop one of them")
-    if not sequence and (args.left is None or args.right is None):
-        raise DepthError("missing images", field="LEFT RIGHT", hint="pass LEFT RIGHT or --left-dir/--right-dir")
+    if sum((sequence, stream, args.pair_left is not None)) > 1:
+        raise DepthError("give one input: LEFT RIGHT images, a recording, or --left-dir/--right-dir", field="LEFT",
+                         hint="drop the others")
+    if not (sequence or stream) and args.pair_left is None:
+        raise DepthError("missing images", field="LEFT RIGHT",
+                         hint="pass PROFILE LEFT RIGHT, or PROFILE and a recording (FOLDER, --bag, --video, ...)")
+    if stream and args.rectified:
+        raise DepthError("takes LEFT RIGHT or --left-dir/--right-dir, not a recording", field="--rectified",
+                         hint="drop --rectified and give the recording's profile")
     if args.alpha is not None and not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
@@ -132,6 +153,12 @@ def _cmd_depth(args: argparse.Namespace) -> int:
         raise DepthError(f"--fov sets the rectified field of fisheye (equidistant) profiles; {pipeline.profile.name} "
                          f"is {pipeline.profile.left.distortion.model}", field="--fov",
                          hint="drop --fov, or use --alpha to keep more of a pinhole image")
+    if stream or args.to != "files":
+        return run_stream(args, pipeline)
+    if args.pcd:  # the older layouts have no PCD; the option must not vanish silently
+        raise DepthError("writes points/NAME.pcd of a recording's frames", field="--pcd",
+                         hint="give the pair as a recording (PROFILE FOLDER or --left/--right), or use --ply")
+    args.ply = args.ply or args.points
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
 
 
@@ -167,7 +194,7 @@ def _geometry(pipeline: StereoPipeline, rect: StereoRectification, depth_range: 
 def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     from s2r.depth.outputs import limit_depth_range, read_image, write_camera_info, write_outputs
 
-    left, right = read_image(args.left), read_image(args.right)
+    left, right = read_image(args.pair_left), read_image(args.pair_right)
     check_output_dir(args.output, force=True)  # "-o FILE": a file where the output folder should be
     names = ["disparity.npy", "depth.png", "depth_color.png", "camera_info.yaml"] + (["points.ply"] if args.ply
                                                                                       else [])
@@ -178,7 +205,8 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     except DepthError as exc:  # size mismatch between the images or with the profile: name the image
         if exc.path is not None:
             raise
-        raise DepthError(exc.message, path=args.right if exc.field == "right" else args.left, field=exc.field,
+        raise DepthError(exc.message, path=args.pair_right if exc.field == "right" else args.pair_left,
+                         field=exc.field,
                          hint=exc.hint) from None
     depth_range = _depth_range(args, pipeline)
     removed = 0
@@ -193,7 +221,7 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     valid_fraction = float(result.valid.mean())
     if valid_fraction < LOW_VALID_FRACTION:  # a silent 0 % looks like a result; it is almost always the input
         log.warning("%s: only %.1f %% of the pixels have depth: check that LEFT and RIGHT are not swapped and "
-                    "are this profile's cameras, and the profile's depth range", args.left, 100 * valid_fraction)
+                    "are this profile's cameras, and the profile's depth range", args.pair_left, 100 * valid_fraction)
     summary: dict[str, Any] = {"profile": pipeline.profile.name, "preset": pipeline.preset,
                "num_disparities": pipeline.config.num_disparities, "postprocess": list(pipeline.postprocess),
                "valid_fraction": valid_fraction, "out_of_range_removed": removed,

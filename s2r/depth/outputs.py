@@ -8,7 +8,7 @@ File conventions:
 - ``depth_color.png``: the disparity through OpenCV's JET colour map (near red, far blue), invalid black, with a
   colour bar on the right labelled in metres (near at the top, far at the bottom).
 - ``points.ply``: binary little-endian PLY, float32 x y z metres in the rectified left optical frame and uchar
-  red green blue.
+  red green blue; ``.pcd``: binary PCD v0.7 of the same points (x y z float32, rgb packed as PCL does).
 - ``camera_info.yaml``: ROS camera_info (camera_calibration_parsers YAML) of the RECTIFIED left camera, the frame
   of every output above: K and P from the rectified projection P1, R identity, zero distortion, the image size.
 
@@ -38,6 +38,9 @@ __all__ = [
     "depth_to_mm",
     "disparity_colour",
     "limit_depth_range",
+    "pcd_bytes",
+    "ply_bytes",
+    "png_bytes",
     "read_image",
     "rectified_camera_info",
     "write_camera_info",
@@ -170,7 +173,8 @@ def write_camera_info(path: str | Path, rect: StereoRectification, *, name: str 
     return atomic_write_text(path, text, force=force)
 
 
-def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
+def png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> bytes:
+    """``image`` (8- or 16-bit) as PNG bytes; DepthError naming ``path`` when OpenCV cannot encode it."""
     ok, buf = cv2.imencode(".png", image)
     if not ok:
         raise DepthError("PNG encoding failed", path=path)
@@ -180,7 +184,7 @@ def _png_bytes(image: NDArray[np.uint8] | NDArray[np.uint16], path: Path) -> byt
 def write_depth_png(path: str | Path, depth_m: NDArray[np.floating], *, force: bool = False) -> Path:
     """Write depth (metres, NaN invalid) as a uint16 millimetre PNG, 0 invalid."""
     path = Path(path)
-    return atomic_write_bytes(path, _png_bytes(depth_to_mm(depth_m), path), force=force)
+    return atomic_write_bytes(path, png_bytes(depth_to_mm(depth_m), path), force=force)
 
 
 def write_disparity(path: str | Path, disparity: NDArray[np.floating], *, force: bool = False) -> Path:
@@ -202,6 +206,20 @@ def ply_bytes(points: NDArray[np.float32], colours: NDArray[np.uint8]) -> bytes:
               "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n")
     rows = np.empty(n, dtype=[("xyz", "<f4", (3,)), ("rgb", "u1", (3,))])
     rows["xyz"], rows["rgb"] = points, colours
+    return header.encode("ascii") + rows.tobytes()
+
+
+def pcd_bytes(points: NDArray[np.float32], colours: NDArray[np.uint8]) -> bytes:
+    """(N, 3) points (metres) with (N, 3) RGB colours as the bytes of a binary PCD v0.7 (PCL's layout: x y z
+    float32 and rgb as the float32 whose bits are 0x00RRGGBB)."""
+    n = int(points.shape[0])
+    header = ("# .PCD v0.7 - s2r depth point cloud, metres, rectified left optical frame\nVERSION 0.7\n"
+              "FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+              f"WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA binary\n")
+    rgb = np.asarray(colours, np.uint32)
+    packed = ((rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]).astype("<u4")
+    rows = np.empty(n, dtype=[("xyz", "<f4", (3,)), ("rgb", "<u4")])
+    rows["xyz"], rows["rgb"] = points, packed
     return header.encode("ascii") + rows.tobytes()
 
 
@@ -227,8 +245,8 @@ def write_outputs(folder: str | Path, result: DepthResult, *, prefix: str = "", 
     depth_path = folder / f"{prefix}depth.png"
     written = [
         batch.add_bytes(folder / f"{prefix}disparity.npy", npy_bytes(np.asarray(result.disparity, np.float32))),
-        batch.add_bytes(depth_path, _png_bytes(depth_to_mm(result.depth), depth_path)),
-        batch.add_bytes(colour_path, _png_bytes(depth_colour_with_bar(result.disparity, result.Q, colour_range_m),
+        batch.add_bytes(depth_path, png_bytes(depth_to_mm(result.depth), depth_path)),
+        batch.add_bytes(colour_path, png_bytes(depth_colour_with_bar(result.disparity, result.Q, colour_range_m),
                                                colour_path)),
     ]
     if ply:

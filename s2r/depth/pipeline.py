@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
@@ -36,6 +36,9 @@ from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.rectification import StereoRectification, stereo_rectification
 from s2r.registry import load_profile
+
+if TYPE_CHECKING:
+    from s2r.depth.stream import DepthFrame
 
 __all__ = ["PRESETS", "DepthResult", "StereoPipeline", "check_side_by_side"]
 
@@ -231,6 +234,32 @@ class StereoPipeline:
         """Fixed-point disparity of the RIGHT image (x_left = x_right + d): the flipped pair matched as usual."""
         flipped = self._matchers(geo.config).compute(cv2.flip(rect_right, 1), cv2.flip(rect_left, 1))
         return np.asarray(cv2.flip(flipped, 1), np.int16)
+
+    def stream(self, recording: Any, *, workers: int = 2, depth_range_m: tuple[float, float] | None = None
+               ) -> Iterator[DepthFrame]:
+        """Depth of every frame of a recording, in order, decoding, matching and the caller's own work overlapped
+        (:func:`s2r.depth.stream.depth_frames`).
+
+        Args:
+            recording: a ``FrameSource`` (:func:`s2r.recordings.open_recording`: folders, globs, bags, videos), a
+                :class:`s2r.recordings.RecordingSpec`, a folder path (``left/`` + ``right/``, ...), or any iterable
+                of :class:`s2r.recordings.StereoFrame`. Images of another size than the profile's are refused
+                from their headers, before decoding (unless ``resize``).
+            workers: matching threads.
+            depth_range_m: ``(near, far)`` metres; depths outside are invalid (default: all kept).
+
+        Yields :class:`s2r.depth.stream.DepthFrame`: ``name``, ``stamp_ns``, ``frame_id`` and ``result``.
+        """
+        from s2r.depth.stream import depth_frames
+        from s2r.recordings import RecordingSpec, open_recording
+
+        size = None if self.resize or self.rectified else self.profile.image_size
+        if isinstance(recording, (str, Path)):
+            recording = open_recording(folder=Path(recording), expected_size=size, error=DepthError)
+        elif isinstance(recording, RecordingSpec):
+            recording = open_recording(recording, expected_size=size, error=DepthError)
+        frames = recording.frames() if hasattr(recording, "frames") else recording
+        return depth_frames(self, frames, workers=workers, depth_range_m=depth_range_m)
 
     def compute(self, left: Any, right: Any) -> DepthResult:
         """Depth of one raw (unrectified) stereo pair of the profile's size (grey or BGR uint8 arrays)."""

@@ -110,7 +110,7 @@ def test_bad_images(setup: tuple[Path, Path, Path], tmp_path: Path, capsys: pyte
     assert main(["depth", "--profile", str(profile), str(big), str(big), "-o", out]) == 2
     assert "images are 640x480 but profile small_rig is 320x240" in capsys.readouterr().err
     assert main(["depth", "--profile", str(profile), str(left), "-o", out]) == 2
-    assert "missing images" in capsys.readouterr().err
+    assert "one image given; a pair needs LEFT and RIGHT" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
 

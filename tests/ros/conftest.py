@@ -25,7 +25,7 @@ HELPER = Path(__file__).with_name("ros_helper.py")
 REQUIRED_FILES = ("/usr/bin/roscore", "/usr/lib/stereo_image_proc/stereo_image_proc",
                   "/usr/share/stereo_image_proc/nodelet_plugins.xml", "/usr/share/image_proc/nodelet_plugins.xml",
                   "/usr/share/nodelet/package.xml")
-REQUIRED_MODULES = "rospy, rosbag, image_geometry, camera_calibration_parsers, stereo_msgs.msg, cv2"
+REQUIRED_MODULES = "rospy, rosbag, image_geometry, camera_calibration_parsers, stereo_msgs.msg, tf2_msgs.msg, cv2"
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

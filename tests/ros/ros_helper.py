@@ -4,6 +4,8 @@
     ros_helper.py geometry FOLDER     (stdin JSON: "points_rect" [[x, y, z]], "raw_left" [[u, v]], "disparities")
     ros_helper.py stereo FOLDER LEFT RIGHT OUT [--timeout S]
     ros_helper.py bag OUT.bag LEFT_GLOB RIGHT_GLOB LEFT_TOPIC RIGHT_TOPIC
+    ros_helper.py readbag BAG OUT       (rosbag's own reader: OUT/summary.json, OUT/depth_N.npy)
+    ros_helper.py play BAG OUT NS       (rosbag play to rospy subscribers: the same files of what arrived)
 
 ``geometry`` reads FOLDER/left.yaml and right.yaml with camera_calibration_parsers and answers through
 image_geometry (StereoCameraModel): rectified projections, rectifyPoint of raw left pixels, Z of disparities.
@@ -121,6 +123,60 @@ def bag(out, left_glob, right_glob, left_topic, right_topic):
     print(len(lefts))
 
 
+def _depth_array(msg):
+    dtype = np.float32 if msg.encoding == "32FC1" else np.uint16
+    return as_array(msg, dtype)
+
+
+def _summary(messages, out):
+    """messages: [(topic, msg, bag time or None)] -> OUT/summary.json, OUT/depth_N.npy, OUT/disparity_N.npy."""
+    summary = {"topics": {}, "depth_stamps": [], "frame_ids": [], "tf": [], "disparity": []}
+    depth_n = disp_n = 0
+    for topic, msg, _ in messages:
+        summary["topics"][topic] = summary["topics"].get(topic, 0) + 1
+        if msg._type == "tf2_msgs/TFMessage":
+            summary["tf"] += [[t.header.frame_id, t.child_frame_id, t.transform.translation.x,
+                               t.transform.translation.y, t.transform.translation.z] for t in msg.transforms]
+            continue
+        summary["frame_ids"].append(msg.header.frame_id)
+        if topic.endswith("depth/image_rect"):
+            summary["depth_stamps"].append(msg.header.stamp.to_nsec())
+            np.save(os.path.join(out, f"depth_{depth_n}.npy"), _depth_array(msg))
+            depth_n += 1
+        elif msg._type == "stereo_msgs/DisparityImage":
+            summary["disparity"].append([msg.f, msg.T, msg.min_disparity, msg.image.encoding])
+            np.save(os.path.join(out, f"disparity_{disp_n}.npy"), as_array(msg.image, np.float32))
+            disp_n += 1
+    with open(os.path.join(out, "summary.json"), "w", encoding="utf-8") as handle:
+        json.dump(summary, handle)
+
+
+def readbag(path, out):
+    with rosbag.Bag(path) as bag:
+        info = bag.get_type_and_topic_info()
+        types = {topic: value.msg_type for topic, value in info.topics.items()}
+        messages = [(topic, msg, t.to_nsec()) for topic, msg, t in bag.read_messages()]
+    _summary(messages, out)
+    with open(os.path.join(out, "types.json"), "w", encoding="utf-8") as handle:
+        json.dump(types, handle)
+
+
+def play(path, out, namespace):
+    from stereo_msgs.msg import DisparityImage
+    from tf2_msgs.msg import TFMessage
+
+    got = []
+    rospy.init_node("s2r_listener", anonymous=True, disable_signals=True)
+    for topic, cls in ((f"{namespace}/depth/image_rect", Image), (f"{namespace}/disparity", DisparityImage),
+                       ("/tf_static", TFMessage)):
+        rospy.Subscriber(topic, cls, lambda m, t=topic: got.append((t, m, None)), queue_size=1000)
+    time.sleep(1.0)
+    subprocess.run(["/usr/bin/rosbag", "play", "-q", "-d", "2", "-r", "0.5", path], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(2.0)
+    _summary(got, out)
+
+
 def main():
     parser = argparse.ArgumentParser()
     sub = parser.add_subparsers(dest="cmd", required=True)
@@ -132,7 +188,19 @@ def main():
     b = sub.add_parser("bag")
     for name in ("out", "left_glob", "right_glob", "left_topic", "right_topic"):
         b.add_argument(name)
+    for name in ("readbag", "play"):
+        r = sub.add_parser(name)
+        r.add_argument("bag")
+        r.add_argument("out")
+        if name == "play":
+            r.add_argument("namespace")
     args = parser.parse_args()
+    if args.cmd == "readbag":
+        readbag(args.bag, args.out)
+        return
+    if args.cmd == "play":
+        play(args.bag, args.out, args.namespace)
+        return
     if args.cmd == "geometry":
         geometry(args.folder)
     elif args.cmd == "stereo":

@@ -1,0 +1,143 @@
+"""Depth on a stream of stereo frames: decode, match and hand over in overlapped stages on threads.
+
+One reader thread pulls frames from the recording (decoding happens there: ``imdecode``, ``VideoCapture.read``),
+``workers`` threads rectify and match (OpenCV releases the GIL in remap and the matchers), and the caller's own
+thread consumes the results in recording order (a writer encodes PNGs or serialises bag messages there). At most
+``2 * workers + 2`` frames are in flight, so a long recording never sits in memory.
+
+    >>> for frame in StereoPipeline("realsense_d435_848x480").stream(recording):
+    ...     frame.result.depth      # (H, W) float32 metres, rectified left optical frame, NaN invalid
+    ...     frame.stamp_ns, frame.frame_id, frame.name
+
+Frames: every output is in the RECTIFIED left camera's pixel grid and frame (as stereo_image_proc's), labelled
+with the profile's left ``frame_id`` (or the input's when the profile has none).
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections import deque
+from collections.abc import Iterable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from s2r.depth.outputs import limit_depth_range
+from s2r.depth.pipeline import DepthResult
+from s2r.errors import DepthError
+from s2r.recordings.frames import StereoFrame
+
+if TYPE_CHECKING:
+    from s2r.depth.pipeline import StereoPipeline
+
+__all__ = ["SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids"]
+
+log = logging.getLogger(__name__)
+
+#: Still files carry no time: their stamps are synthesized as ``start + index * period`` (1 s, then 10 Hz), and
+#: every output says so (``stamp_source: synthesized``).
+SYNTHETIC_START_NS = 1_000_000_000
+SYNTHETIC_PERIOD_NS = 100_000_000
+
+
+@dataclass(frozen=True)
+class DepthFrame:
+    """One frame's depth with what names it.
+
+    Attributes:
+        index, name, source: the input frame's (see :class:`s2r.recordings.StereoFrame`).
+        stamp_ns: the input left image's stamp in nanoseconds, or a synthesized one (``stamp_synthesized``).
+        stamp_synthesized: True when the input had no time (still files).
+        frame_id: the frame every output of this frame is labelled with (never empty).
+        result: the depth, in the rectified left camera's grid and frame.
+    """
+
+    index: int
+    name: str
+    source: str
+    stamp_ns: int
+    stamp_synthesized: bool
+    frame_id: str
+    result: DepthResult
+
+
+def frame_ids(profile_left: str, profile_right: str, input_frame_id: str, profile_name: str) -> tuple[str, str]:
+    """``(left, right)`` optical frame ids of the outputs: the profile's, else the input's, else one made from the
+    profile's name (``NAME_left_optical_frame``, with a warning); the right one defaults to the left's with
+    ``left`` replaced by ``right`` (or ``_right`` appended)."""
+    left = profile_left or input_frame_id
+    if not left:
+        left = re.sub(r"[^A-Za-z0-9_]", "_", profile_name).strip("_") + "_left_optical_frame"
+        log.warning("neither the profile nor the recording names a frame_id: the outputs use %r", left)
+    right = profile_right or (left.replace("left", "right") if "left" in left else f"{left}_right")
+    return left, right
+
+
+def _stamp(frame: StereoFrame, previous: int | None) -> tuple[int, bool]:
+    """The frame's stamp (ns) and whether it was synthesized; recorded stamps must not run backwards."""
+    if frame.stamp_ns is None:
+        return SYNTHETIC_START_NS + frame.index * SYNTHETIC_PERIOD_NS, True
+    if previous is not None and frame.stamp_ns < previous:
+        log.warning("%s: stamp %d runs backwards (previous %d); kept as recorded", frame.source, frame.stamp_ns,
+                    previous)
+    return int(frame.stamp_ns), False
+
+
+def _compute(pipeline: StereoPipeline, read: Future[StereoFrame | None],
+             depth_range_m: tuple[float, float] | None) -> tuple[StereoFrame, DepthResult] | None:
+    frame = read.result()
+    if frame is None:
+        return None
+    try:
+        result = pipeline.compute(frame.left, frame.right)
+    except DepthError as exc:  # e.g. one frame of another size: say which frame
+        if exc.path is not None:
+            raise
+        raise DepthError(exc.message, path=frame.source, field=exc.field, hint=exc.hint) from None
+    if depth_range_m is not None:
+        result, _ = limit_depth_range(result, *depth_range_m)
+    return frame, result
+
+
+def depth_frames(pipeline: StereoPipeline, frames: Iterable[StereoFrame], *, workers: int = 2,
+                 depth_range_m: tuple[float, float] | None = None) -> Iterator[DepthFrame]:
+    """Depth of every frame of ``frames``, in order, computed ``workers`` frames at a time.
+
+    Args:
+        pipeline: the profile's pipeline (its ``compute`` is thread-safe).
+        frames: any iterable of :class:`StereoFrame` (a ``FrameSource``'s ``frames()``); iterated on one reader
+            thread, so its decoding overlaps the matching.
+        workers: matching threads (>= 1).
+        depth_range_m: ``(near, far)`` metres; depths outside are invalid (see ``limit_depth_range``).
+
+    Errors (unreadable frame, size mismatch) propagate from the frame that failed, in order; stopping the
+    iteration early cancels the frames not yet started.
+    """
+    if workers < 1:
+        raise DepthError(f"must be at least 1, got {workers}", field="workers", hint="e.g. 2")
+    source: Iterator[StereoFrame] = iter(frames)
+    reader = ThreadPoolExecutor(1, thread_name_prefix="s2r-decode")
+    computer = ThreadPoolExecutor(workers, thread_name_prefix="s2r-depth")
+    pending: deque[Future[Any]] = deque()
+    previous: int | None = None
+    ids: dict[str, str] = {}  # input frame_id -> output frame_id (warned about once)
+    try:
+        while True:
+            while len(pending) < 2 * workers + 2:  # reads past the end return None, and so do their computes
+                read = reader.submit(next, source, None)
+                pending.append(computer.submit(_compute, pipeline, read, depth_range_m))
+            done = pending.popleft().result()
+            if done is None:
+                return
+            frame, result = done
+            stamp, synthesized = _stamp(frame, previous)
+            previous = stamp
+            if frame.frame_id not in ids:
+                ids[frame.frame_id] = frame_ids(pipeline.profile.left.frame_id, "", frame.frame_id,
+                                                pipeline.profile.name)[0]
+            yield DepthFrame(index=frame.index, name=frame.name, source=frame.source, stamp_ns=stamp,
+                             stamp_synthesized=synthesized, frame_id=ids[frame.frame_id], result=result)
+    finally:
+        for pool in (reader, computer):
+            pool.shutdown(wait=True, cancel_futures=True)
