@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import stat
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -54,8 +53,9 @@ class RemoteEntry:
 
 
 def is_url(text: str) -> bool:
-    """Whether ``text`` is written as a URL (``scheme://...``), supported or not (see :func:`check_url`)."""
-    return re.match(r"[A-Za-z][A-Za-z0-9+.\-]*://", text) is not None
+    """Whether ``text`` is written as a URL (``scheme://...``, fsspec chains too), supported or not (see
+    :func:`check_url`)."""
+    return "://" in text
 
 
 def check_url(url: str) -> str:

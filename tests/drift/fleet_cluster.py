@@ -96,3 +96,21 @@ def dask_cluster(folder: Path, *, workers: int = 2) -> Iterator[Cluster]:
     finally:
         for process in [*(cluster.workers if cluster else []), scheduler]:
             stop(process)
+
+
+@contextlib.contextmanager
+def http_server(folder: Path) -> Iterator[str]:
+    """``python -m http.server`` serving ``folder`` on 127.0.0.1 (a free port it picks itself); its base URL.
+    Stopped by PID at the end."""
+    process = subprocess.Popen([sys.executable, "-u", "-m", "http.server", "0", "--bind", "127.0.0.1",
+                                "--directory", str(folder)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                               env=child_environment())
+    try:
+        assert process.stdout is not None
+        line = process.stdout.readline().decode()  # "Serving HTTP on 127.0.0.1 port 43503 (http://...) ..."
+        port = int(line.split(" port ")[1].split()[0])
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        stop(process)
+        if process.stdout is not None:
+            process.stdout.close()
