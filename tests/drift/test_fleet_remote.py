@@ -62,3 +62,19 @@ def test_a_recording_url_of_another_kind_is_bad_input(tmp_path: Path, capsys: py
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"error: {fleet}: robots[0].recording: ") and "\n" not in err
     assert not (tmp_path / "o").exists()
+
+
+def test_s3_without_the_s3fs_extra_is_named_per_robot(tmp_path: Path, drift_rig_file: Path) -> None:
+    """Without s3fs nothing is contacted: the robot fails with the one line saying what to install."""
+    import importlib.util
+
+    if importlib.util.find_spec("s3fs") is not None:
+        pytest.skip("s3fs is installed: this would contact S3, and nothing but loopback is contacted in tests")
+    fleet = tmp_path / "fleet.yaml"
+    fleet.write_text(json.dumps({"robots": [{"name": "a", "profile": str(drift_rig_file),
+                                             "recording": "s3://fleet-logs/a/"}]}))
+    (job,) = load_fleet(fleet, settings=CheckSettings())
+    row = run_robot(job)
+    assert row["verdict"] == "failed"
+    assert row["reasons"] == ["s3://fleet-logs/a/: reading s3:// needs s3fs (pip install 's2r[s3]') "
+                              "(install it on every worker)"]
