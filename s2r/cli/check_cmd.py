@@ -212,13 +212,12 @@ def _fleet_output(args: argparse.Namespace) -> Any:
     Without --resume a folder holding files is refused unless --force (then an old journal is dropped); with
     --resume it must hold an interrupted run's journal, and other files only with --force."""
     from s2r.drift.fleet_store import JOURNAL, Journal
-    from s2r.fileio import check_output_dir, prepare_output_dir
+    from s2r.fileio import check_output_dir
 
     out = Path(args.output)
-    if not args.resume:
+    if not args.resume:  # the folder is made when the first robot finishes (none for a cluster never reached)
         check_output_dir(out, force=args.force)
         Journal(out).remove()
-        prepare_output_dir(out, force=args.force)
         return Journal(out)
     journal = Journal(out)
     if out.is_symlink() or not journal.exists():
@@ -285,9 +284,11 @@ def _write_fleet(args: argparse.Namespace, run: Any, trends: dict[str, Any]) -> 
     """DIR/index.html, DIR/summary.json and each robot's DIR/NAME/check.html + check.json, published whole or not
     at all (one :class:`~s2r.fileio.OutputBatch`: a write error leaves none of them)."""
     from s2r.drift.report import fleet_report_html
-    from s2r.fileio import OutputBatch
+    from s2r.fileio import OutputBatch, prepare_output_dir
 
     out, rows = Path(args.output), run.rows
+    if not out.is_dir():  # no robot was journalled (every row resumed, or none finished): made now
+        prepare_output_dir(out, force=args.force)
     created: list[Path] = []
     try:
         with OutputBatch(force=args.force, root=out) as batch:
