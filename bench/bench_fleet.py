@@ -145,6 +145,10 @@ def main() -> None:
             print(f"separate-process cluster, 2 workers: {two:.1f} s wall, workers {two_cpu / args.robots:.2f} CPU s "
                   f"per robot; {_load()}")
     print(f"speed-up 1 -> 2 workers: {one / two:.2f}x wall (the process's start and Dask's connect are in both)")
+    cores, load = os.cpu_count() or 1, os.getloadavg()[0]
+    if load > cores:
+        print(f"  the machine is busier than its cores (load {load:.1f} on {cores}): the second worker finds no free "
+              "core, so this wall speed-up measures the queue, not Dask; the CPU s per robot above still hold")
     per_robot = max(one_cpu, two_cpu) / args.robots
     # a nightly check of a real robot: 20 pairs at 848x480 (a D435's infrared pair); matching scales with pixels
     nightly = per_robot * (20.0 / args.frames) * (848 * 480) / (w * h)
