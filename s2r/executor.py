@@ -35,8 +35,8 @@ from typing import Any, Generic, TypeVar
 
 from s2r.errors import S2RError
 
-__all__ = ["TaskOutcome", "TaskRunner", "child_environment", "children_search_no_relative_folder", "local_pool",
-           "open_runner"]
+__all__ = ["SchedulerLost", "TaskOutcome", "TaskRunner", "child_environment", "children_search_no_relative_folder",
+           "local_pool", "open_runner"]
 
 ItemT = TypeVar("ItemT")
 ResultT = TypeVar("ResultT")
@@ -45,6 +45,7 @@ _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 _WATCHDOG_PERIOD_S = 1.0
 #: How long a Dask scheduler may take to answer (s): connect and handshake together, a hard deadline.
 SCHEDULER_DEADLINE_S = 6.0
+_CLOSE_S = 5.0
 
 
 def _die_with_parent(parent_pid: int) -> None:
@@ -137,31 +138,134 @@ class TaskOutcome(Generic[ItemT, ResultT]):
 class TaskRunner:
     """Runs ``fn(item)`` for many items on the chosen backend; outcomes arrive as tasks finish.
 
-    A task that raises does not stop the others: its exception comes back in its :class:`TaskOutcome`.
+    A task that raises does not stop the others: its exception comes back in its :class:`TaskOutcome`. On Dask,
+    a task whose worker dies is run again on another (the scheduler's own retry, up to
+    ``distributed.scheduler.allowed-failures`` times); :attr:`lost_workers` names the workers that left during the
+    run. Losing the scheduler itself raises :class:`SchedulerLost` within :data:`SCHEDULER_LOST_S`; leaving the
+    loop early (an error, Ctrl-C) cancels every task not yet finished, on the cluster too.
     """
 
-    def __init__(self, backend: Any, *, kind: str, workers: int) -> None:
+    def __init__(self, backend: Any, *, kind: str, workers: int, address: str = "") -> None:
         self._backend = backend
         self.kind = kind  # "local", "dask-local" or "dask"
         self.workers = workers
+        self.address = address
+        self.lost_workers: list[str] = []
 
     def as_completed(self, fn: Callable[[ItemT], ResultT], items: Sequence[ItemT]
                      ) -> Iterator[TaskOutcome[ItemT, ResultT]]:
         """Submit every item, then yield outcomes in completion order."""
         if self.kind == "local":
             futures = {self._backend.submit(fn, item): k for k, item in enumerate(items)}
-            done: Iterator[Any] = futures_completed(futures)
-        else:
-            from distributed import as_completed as dask_completed
-
-            futures = {self._backend.submit(fn, item, pure=False): k for k, item in enumerate(items)}
-            done = iter(dask_completed(list(futures)))  # type: ignore[no-untyped-call]
-        for future in done:
-            k = futures[future]
             try:
-                yield TaskOutcome(k, items[k], future.result(), None)
-            except Exception as exc:  # a task's own failure is data for the caller, not the end of the run
-                yield TaskOutcome(k, items[k], None, exc)
+                for future in futures_completed(futures):
+                    yield _outcome(future, futures[future], items)
+            finally:
+                for future in futures:
+                    future.cancel()
+            return
+        futures = {self._backend.submit(fn, item, pure=False): k for k, item in enumerate(items)}
+        try:
+            for future in _dask_completed(self._backend, list(futures), self):
+                yield _outcome(future, futures[future], items)
+        finally:
+            with contextlib.suppress(Exception):  # the scheduler may be gone: nothing left to cancel there
+                self._backend.cancel(list(futures), force=True)
+
+
+def _outcome(future: Any, k: int, items: Sequence[Any]) -> TaskOutcome[Any, Any]:
+    try:
+        return TaskOutcome(k, items[k], future.result(), None)
+    except Exception as exc:  # a task's own failure is data for the caller, not the end of the run
+        return TaskOutcome(k, items[k], None, exc)
+
+
+class SchedulerLost(S2RError):
+    """The Dask scheduler went away in the middle of a run (its tasks' results cannot come back)."""
+
+
+#: How long a Dask client may stay cut off from its scheduler, or a cluster stay without any worker, mid-run before
+#: the run is given up (s).
+SCHEDULER_LOST_S = 10.0
+NO_WORKERS_S = 30.0
+_POLL_S = 0.2
+
+
+class _ClusterWatch:
+    """What the scheduler says about its workers during a run, pushed to the client as events (no polling):
+    the workers that left unexpectedly, and how many remain."""
+
+    def __init__(self, client: Any) -> None:
+        self.lost: list[str] = []
+        self.workers = len(_worker_names(client))
+        self._client = client
+        client.subscribe_topic("all", self._event)
+
+    def _event(self, event: tuple[float, Any]) -> None:
+        message = event[1] if isinstance(event, tuple) and len(event) == 2 else {}
+        if not isinstance(message, dict):
+            return
+        if message.get("action") == "add-worker":
+            self.workers += 1
+        elif message.get("action") == "remove-worker":
+            self.workers = max(0, self.workers - 1)
+            if not message.get("expected"):
+                self.lost.append(str(message.get("worker", "?")))
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self._client.unsubscribe_topic("all")
+
+
+def _worker_names(client: Any) -> set[str]:
+    """The addresses of the scheduler's workers now (one round trip; empty when it cannot answer)."""
+    with contextlib.suppress(Exception):
+        return set((client.scheduler_info() or {}).get("workers", {}))
+    return set()
+
+
+def _given_up(runner: TaskRunner, why: str, done: int, total: int) -> SchedulerLost:
+    return SchedulerLost(f"{why} mid-run ({done} of {total} tasks finished); nothing was written",
+                         path=runner.address or None, field="--scheduler",
+                         hint="restart the scheduler and its workers, then run again with --resume")
+
+
+def _dask_completed(client: Any, futures: list[Any], runner: TaskRunner) -> Iterator[Any]:
+    """``futures`` as they finish, watching the cluster: the workers lost go to ``runner.lost_workers``; a
+    scheduler unreachable for :data:`SCHEDULER_LOST_S`, or no worker for :data:`NO_WORKERS_S`, raises
+    :class:`SchedulerLost` (never a hang)."""
+    from distributed import as_completed as dask_completed
+
+    pending: Any = dask_completed(futures)  # type: ignore[no-untyped-call]
+    watch = _ClusterWatch(client)
+    since = {"cut off": None, "no workers": None}  # type: dict[str, float | None]
+    limits = {"cut off": SCHEDULER_LOST_S, "no workers": NO_WORKERS_S}
+    why = {"cut off": "lost the Dask scheduler", "no workers": "no Dask worker left"}
+    done = 0
+    try:
+        while not pending.is_empty():
+            batch = pending.next_batch(block=False)
+            now = time.monotonic()
+            for key, bad in (("cut off", client.status != "running"), ("no workers", watch.workers < 1)):
+                start = since[key]
+                if not bad:
+                    since[key] = None
+                elif start is None:
+                    since[key] = now
+                elif now - start > limits[key]:
+                    raise _given_up(runner, why[key], done, len(futures))
+            runner.lost_workers = list(watch.lost)
+            for future in batch:
+                if future.status == "cancelled":  # the client cancels every task when its scheduler goes
+                    raise _given_up(runner, "lost the Dask scheduler" if client.status != "running" else
+                                    "the run's tasks were cancelled on the cluster", done, len(futures))
+                done += 1
+                yield future
+            if not batch:
+                time.sleep(_POLL_S)
+        runner.lost_workers = list(watch.lost)
+    finally:
+        watch.close()
 
 
 @contextlib.contextmanager
@@ -179,14 +283,36 @@ def open_runner(*, workers: int, scheduler: str | None = None, dask: bool = Fals
         with local_pool(workers) as pool:
             yield TaskRunner(pool, kind="local", workers=workers)
         return
-    with children_search_no_relative_folder():  # a local cluster's nannies spawn (and respawn) its workers
+    with children_search_no_relative_folder(), _quiet_dask():  # nannies spawn (and respawn) the local workers
         client, cluster = _dask_client(workers=workers, scheduler=scheduler)
         try:
-            yield TaskRunner(client, kind="dask" if scheduler else "dask-local", workers=workers)
+            yield TaskRunner(client, kind="dask" if scheduler else "dask-local", workers=workers,
+                             address=scheduler or "")
         finally:
-            client.close()
+            with contextlib.suppress(Exception):  # a lost scheduler must not hold the exit
+                client.close(timeout=_CLOSE_S)
             if cluster is not None:
                 cluster.close()
+
+
+@contextlib.contextmanager
+def _quiet_dask() -> Iterator[None]:
+    """Dask's own log records (a lost scheduler or worker prints tracebacks) held below CRITICAL while a run is
+    open: s2r reports what happened itself, in one line."""
+    import logging
+
+    with contextlib.suppress(ImportError):  # its loggers exist once it is imported
+        import distributed  # noqa: F401
+    loggers = [logging.getLogger(name) for name in ["distributed", *logging.root.manager.loggerDict]
+               if name.split(".")[0] == "distributed"]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
 
 
 def _dask_client(*, workers: int, scheduler: str | None) -> tuple[Any, Any]:

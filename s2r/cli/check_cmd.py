@@ -61,6 +61,10 @@ def register(sub: Any) -> None:
     fc.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="output folder")
     fc.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: a local cluster)")
     fc.add_argument("--workers", type=int, default=2, help="local cluster worker processes (default 2)")
+    fc.add_argument("--resume", action="store_true",
+                    help="check only the robots an interrupted run into the same -o DIR did not finish")
+    fc.add_argument("--history", type=Path, metavar="HDIR",
+                    help="keep this run's results in HDIR and show each robot's trend over the runs kept there")
     _add_settings(fc)
     add_json(fc)
     add_force(fc)
@@ -177,8 +181,8 @@ def _summary(result: Any) -> list[str]:
 
 
 def _cmd_fleet(args: argparse.Namespace) -> int:
-    from s2r.drift.fleet import load_fleet, run_fleet
-    from s2r.fileio import check_output_dir
+    from s2r.drift.fleet import load_fleet
+    from s2r.drift.fleet_store import check_history_folder
 
     settings = _settings(args)
     if args.workers < 1:
@@ -188,18 +192,91 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
         raise CheckError(f"{args.workers} local worker processes on {cores} cores", field="--workers",
                          hint=f"at most {4 * cores} here; for more, run a Dask cluster and pass --scheduler")
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
-    check_output_dir(args.output, force=args.force)
-    bar = ProgressBar(enabled=not (args.quiet or args.json))
-    rows = run_fleet(jobs, workers=args.workers, scheduler=args.scheduler, progress=bar)
-    _write_fleet(args, rows)
-    summary = [{k: v for k, v in r.items() if k not in ("html",)} for r in rows]
+    history = check_history_folder(args.history) if args.history is not None else None
+    journal = _fleet_output(args)
+    with _signals_interrupt():
+        try:
+            run = _run_fleet(args, jobs, journal)
+        except KeyboardInterrupt:
+            done = len(journal.finished({j.name: _key(j) for j in jobs}))
+            print(f"interrupted: {done} of {len(jobs)} robots finished, kept in {journal.folder}; nothing else was "
+                  "written (run the same command with --resume to check the others)", file=sys.stderr)
+            raise
+    rows = run.rows
+    trends = _publish_fleet(args, run, journal, history)
     if args.json:
-        print_json({"robots": summary, "counts": _counts(rows), "output": str(args.output)})
+        print_json({"robots": _summary_rows(rows, trends), "counts": _counts(rows), "output": str(args.output),
+                    "lost_workers": run.lost_workers, "resumed": run.resumed})
     else:
         for r in rows:
             print(f"{r['verdict'].upper():<12} {r['name']:<20} {'; '.join(r['reasons'])}")
         print(f"{len(rows)} robots: " + ", ".join(f"{n} {v}" for v, n in _counts(rows).items() if n))
+        if run.lost_workers:
+            print(f"{len(run.lost_workers)} Dask worker(s) lost during the run ({', '.join(run.lost_workers)}); "
+                  "their robots were run again on the others")
     return 0 if all(r["verdict"] == "good" for r in rows) else 1
+
+
+def _key(job: Any) -> str:
+    from s2r.drift.fleet_store import job_key
+
+    return job_key(job)
+
+
+def _run_fleet(args: argparse.Namespace, jobs: list[Any], journal: Any) -> Any:
+    from s2r.drift.fleet import run_fleet
+
+    bar = ProgressBar(enabled=not (args.quiet or args.json))
+    return run_fleet(jobs, workers=args.workers, scheduler=args.scheduler, progress=bar, journal=journal,
+                     resume=args.resume)
+
+
+def _fleet_output(args: argparse.Namespace) -> Any:
+    """The output folder, created (exclusively unless --force), and its journal of finished robots.
+
+    Without --resume a folder holding files is refused unless --force (then an old journal is dropped); with
+    --resume it must hold an interrupted run's journal, and other files only with --force."""
+    from s2r.drift.fleet_store import JOURNAL, Journal
+    from s2r.fileio import check_output_dir
+
+    out = Path(args.output)
+    if not args.resume:  # the folder is made when the first robot finishes (none for a cluster never reached)
+        check_output_dir(out, force=args.force)
+        Journal(out).remove()
+        return Journal(out)
+    journal = Journal(out)
+    if out.is_symlink() or not journal.exists():
+        raise CheckError("holds no interrupted fleet run to resume", path=out, field="--resume",
+                         hint="run without --resume (or give the -o folder of the interrupted run)")
+    others = [p.name for p in out.iterdir() if p.name != JOURNAL]
+    if others and not args.force:
+        raise CheckError(f"holds other files ({', '.join(sorted(others)[:3])}); nothing was overwritten", path=out,
+                         hint="pass --force to replace them when the run is published")
+    return journal
+
+
+@contextlib.contextmanager
+def _signals_interrupt() -> Any:
+    """SIGTERM ends the run as Ctrl-C does (KeyboardInterrupt: workers, cluster and temporaries closed)."""
+    import signal
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        before = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread (an in-process caller): leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
+def _summary_rows(rows: list[dict[str, Any]], trends: dict[str, Any]) -> list[dict[str, Any]]:
+    return [{**{k: v for k, v in r.items() if k != "html"}, **({"trend": trends[r["name"]]} if r["name"] in trends
+                                                                else {})} for r in rows]
 
 
 def _counts(rows: list[dict[str, Any]]) -> dict[str, int]:
@@ -208,13 +285,35 @@ def _counts(rows: list[dict[str, Any]]) -> dict[str, int]:
     return {v: sum(r["verdict"] == v for r in rows) for v in SEVERITY}
 
 
-def _write_fleet(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
+def _publish_fleet(args: argparse.Namespace, run: Any, journal: Any, history: Path | None) -> dict[str, Any]:
+    """Publish the outputs (whole or not at all), then add the run to the history and drop the journal; the
+    robots' trends (empty without --history)."""
+    import datetime as dt
+
+    from s2r.drift.fleet_store import history_entry, robot_trends, trend_summary, write_history
+
+    entry = history_entry(run.rows, when=dt.datetime.now(dt.timezone.utc))
+    trends: dict[str, Any] = {}
+    if history is not None:
+        for name, points in robot_trends(history, entry).items():
+            trends[name] = {"points": points, **trend_summary(points, points[-1].get("tolerance_deg") or {})}
+    _write_fleet(args, run, trends)
+    if history is not None:
+        path = write_history(history, entry)
+        print(f"history: {path}", file=sys.stderr if args.json else sys.stdout)
+    journal.remove()
+    return trends
+
+
+def _write_fleet(args: argparse.Namespace, run: Any, trends: dict[str, Any]) -> None:
     """DIR/index.html, DIR/summary.json and each robot's DIR/NAME/check.html + check.json, published whole or not
     at all (one :class:`~s2r.fileio.OutputBatch`: a write error leaves none of them)."""
     from s2r.drift.report import fleet_report_html
     from s2r.fileio import OutputBatch, prepare_output_dir
 
-    out = prepare_output_dir(args.output, force=args.force)
+    out, rows = Path(args.output), run.rows
+    if not out.is_dir():  # no robot was journalled (every row resumed, or none finished): made now
+        prepare_output_dir(out, force=args.force)
     created: list[Path] = []
     try:
         with OutputBatch(force=args.force, root=out) as batch:
@@ -225,10 +324,12 @@ def _write_fleet(args: argparse.Namespace, rows: list[dict[str, Any]]) -> None:
                     batch.add_text(folder / "check.html", r["html"])
                     r["report"] = f"{r['name']}/check.html"
                 batch.add_text(folder / "check.json", json.dumps(to_jsonable(data), indent=2))
-            summary = {"robots": [{k: v for k, v in r.items() if k != "html"} for r in rows],
-                       "counts": _counts(rows)}
+            summary = {"robots": _summary_rows(rows, trends), "counts": _counts(rows),
+                       "lost_workers": run.lost_workers, "resumed": run.resumed}
             batch.add_text(out / "summary.json", json.dumps(to_jsonable(summary), indent=2))
-            batch.add_text(out / "index.html", fleet_report_html(rows, fleet_file=args.fleet_file))
+            batch.add_text(out / "index.html", fleet_report_html(
+                rows, fleet_file=args.fleet_file, lost_workers=run.lost_workers, resumed=run.resumed,
+                trends=trends))
             batch.publish()
     except BaseException:
         for folder in reversed(created):  # nothing half-published: the folders made for it go too

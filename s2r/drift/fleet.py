@@ -12,30 +12,48 @@ FLEET.yaml::
       - name: r03
         profile: r03.yaml
         recording: {left: "logs/r03/left_*.png", right: "logs/r03/right_*.png", max_frames: 10}
+      - name: r04
+        profile: r04.yaml
+        recording: https://logs.example.org/r04/2026-12-05/   # a URL (http(s)://, s3://, file://): a folder
+      - name: r05
+        profile: r05.yaml
+        recording: {bag: s3://fleet-logs/r05.bag, left_topic: /l, right_topic: /r}   # or one bag file
 
 A robot whose files are broken or missing is reported as ``failed`` with the reason, never fatal; FLEET.yaml
 itself being malformed is bad input (CheckError, exit 2). Tasks run in worker processes (local pool or Dask),
 and return plain data; the parent writes every file. Paths are made absolute before they are sent: the workers
-of a ``--scheduler`` cluster must see the profiles and recordings at the same paths (a shared file system).
+of a ``--scheduler`` cluster must see the profiles and local recordings at the same paths (a shared file
+system); a recording given as a URL is read by the worker itself (:mod:`s2r.drift.fleet_remote`).
+
+Each row carries ``recording``: where it was read, the number of pairs and a SHA-256 of their names and pixels
+(the recording's identity in the history).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import hashlib
+import re
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from s2r.drift.check import CheckSettings, check_drift
+from s2r.drift.fleet_remote import RemoteRecording, local_source
+from s2r.drift.fleet_store import Journal, job_key
 from s2r.drift.report import check_report_html
-from s2r.drift.source import StereoSource, profile_sizes, read_pairs
+from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
-from s2r.fileio import read_text_file
+from s2r.fileio import TEMP_PREFIX, read_text_file
 from s2r.names import NAME_HINT, is_safe_name
 from s2r.progress import ProgressCallback, report
+from s2r.recordings.remote import RemoteError, check_url, is_url
 from s2r.safeparse import parse_yaml
 
-__all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "RobotJob", "load_fleet", "run_fleet", "run_robot"]
+__all__ = ["MAX_FLEET_CHARS", "MAX_ROBOTS", "SEVERITY", "FleetRun", "RobotJob", "load_fleet", "run_fleet",
+           "run_robot"]
 
 #: Verdicts from most to least severe (the summary's sort order).
 SEVERITY = ("failed", "drifted", "cannot tell", "good")
@@ -53,7 +71,7 @@ class RobotJob:
 
     name: str
     profile: str
-    source: StereoSource
+    source: StereoSource | RemoteRecording
     settings: CheckSettings
 
 
@@ -63,8 +81,21 @@ def _resolve(base: Path, value: Any, where: str, path: Path) -> Path:
     return Path(value) if Path(value).is_absolute() else base / value
 
 
-def _source(base: Path, value: Any, where: str, path: Path, max_frames: int) -> StereoSource:
+def _url(value: Any, where: str, path: Path) -> str | None:
+    """``value`` when it is a URL of a scheme s2r reads; None when it is no URL; CheckError for another scheme."""
+    if not isinstance(value, str) or not is_url(value):
+        return None
+    try:
+        return check_url(value)
+    except RemoteError as exc:
+        raise CheckError(exc.message, path=path, field=where, hint=exc.hint) from None
+
+
+def _source(base: Path, value: Any, where: str, path: Path, max_frames: int) -> StereoSource | RemoteRecording:
     if isinstance(value, str):
+        url = _url(value, where, path)
+        if url is not None:
+            return RemoteRecording(url, max_frames=max_frames)
         return StereoSource(folder=_resolve(base, value, where, path), max_frames=max_frames)
     if not isinstance(value, dict) or not value.keys() <= _RECORDING_KEYS:
         extra = sorted(set(value) - _RECORDING_KEYS) if isinstance(value, dict) else []
@@ -73,6 +104,9 @@ def _source(base: Path, value: Any, where: str, path: Path, max_frames: int) -> 
     frames = value.get("max_frames", max_frames)
     if not isinstance(frames, int) or isinstance(frames, bool) or frames < 1:
         raise CheckError("max_frames must be a whole number of at least 1", path=path, field=f"{where}.max_frames")
+    remote = _remote(value, where, path, frames)
+    if remote is not None:
+        return remote
     if "bag" in value:
         return StereoSource(bag=_resolve(base, value["bag"], f"{where}.bag", path), left_topic=value.get("left_topic"),
                             right_topic=value.get("right_topic"), max_frames=frames)
@@ -80,6 +114,20 @@ def _source(base: Path, value: Any, where: str, path: Path, max_frames: int) -> 
         globs = [str(_resolve(base, value.get(k), f"{where}.{k}", path)) for k in ("left", "right")]
         return StereoSource(left_glob=globs[0], right_glob=globs[1], max_frames=frames)
     return StereoSource(folder=_resolve(base, value.get("folder"), f"{where}.folder", path), max_frames=frames)
+
+
+def _remote(value: dict[str, Any], where: str, path: Path, frames: int) -> RemoteRecording | None:
+    """A mapping's recording at a URL (``bag: URL`` with the topics, or ``folder: URL``); None when local."""
+    urls = {k: _url(value.get(k), f"{where}.{k}", path) for k in ("bag", "folder", "left", "right")}
+    if urls["left"] or urls["right"]:
+        raise CheckError("globs of URLs are not read", path=path, field=where,
+                         hint="give the recording folder's URL (recording: https://host/logs/r01/)")
+    if urls["bag"]:
+        if not value.get("left_topic") or not value.get("right_topic"):
+            raise CheckError("a bag needs left_topic and right_topic", path=path, field=where)
+        return RemoteRecording(urls["bag"], max_frames=frames, left_topic=str(value["left_topic"]),
+                               right_topic=str(value["right_topic"]))
+    return RemoteRecording(urls["folder"], max_frames=frames) if urls["folder"] else None
 
 
 def _profile(base: Path, value: Any, where: str, path: Path) -> str:
@@ -135,40 +183,89 @@ def _one_thread_per_worker() -> None:
     cv2.setNumThreads(1)
 
 
+def _identified(pairs: Iterator[GreyPair], identity: dict[str, Any]) -> Iterator[GreyPair]:
+    """``pairs`` passed through, their names and pixels hashed into ``identity`` (``pairs``, ``sha256``)."""
+    digest = hashlib.sha256()
+    for name, left, right in pairs:
+        for part in (name.encode("utf-8"), str(left.shape).encode(), left.tobytes(), right.tobytes()):
+            digest.update(part)
+        identity["pairs"] = identity.get("pairs", 0) + 1
+        identity["sha256"] = digest.hexdigest()
+        yield name, left, right
+
+
+def _check(job: RobotJob, identity: dict[str, Any]) -> Any:
+    from s2r.registry import load_profile
+
+    profile = load_profile(job.profile)
+    if isinstance(job.source, RemoteRecording):  # read by this worker into a copy that goes with the check
+        with tempfile.TemporaryDirectory(prefix=TEMP_PREFIX) as tmp:
+            source = local_source(job.source, Path(tmp))
+            pairs = _identified(read_pairs(source, sizes=profile_sizes(profile)), identity)
+            return check_drift(profile, pairs, settings=job.settings)
+    pairs = _identified(read_pairs(job.source, sizes=profile_sizes(profile)), identity)
+    return check_drift(profile, pairs, settings=job.settings)
+
+
 def run_robot(job: RobotJob) -> dict[str, Any]:
-    """One robot's check as plain data (runs in a worker): the ``--json`` fields, ``html``, and its verdict.
+    """One robot's check as plain data (runs in a worker): the ``--json`` fields, ``html``, its verdict and
+    ``recording`` (where it was read, pairs, SHA-256).
 
     Broken inputs become ``verdict: failed`` with the one-line reason; they never raise.
     """
-    from s2r.registry import load_profile
-
     _one_thread_per_worker()
+    identity: dict[str, Any] = {"source": job.source.describe(), "pairs": 0, "sha256": None}
     try:
-        profile = load_profile(job.profile)
-        result = check_drift(profile, read_pairs(job.source, sizes=profile_sizes(profile)), settings=job.settings)
+        result = _check(job, identity)
     except S2RError as exc:
-        return {"name": job.name, "verdict": "failed", "reasons": [exc.one_line()], "html": None}
+        return {"name": job.name, "verdict": "failed", "reasons": [exc.one_line()], "html": None,
+                "recording": identity}
     except Exception as exc:  # a bug must not take the fleet down; it is named as one
         detail = " ".join(str(exc).split())[:200]
-        return {"name": job.name, "verdict": "failed", "html": None,
+        return {"name": job.name, "verdict": "failed", "html": None, "recording": identity,
                 "reasons": [f"internal error ({type(exc).__name__}: {detail}); this is a bug in s2r"]}
-    row = {"name": job.name, **result.as_dict(), "html": check_report_html(result, source=job.source.describe())}
-    return row
+    return {"name": job.name, **result.as_dict(), "recording": identity,
+            "html": check_report_html(result, source=job.source.describe())}
+
+
+@dataclass
+class FleetRun:
+    """Every robot's row (most severe first), the Dask workers lost during the run, and the robots whose rows
+    came from the journal of an interrupted run (``--resume``)."""
+
+    rows: list[dict[str, Any]]
+    lost_workers: list[str] = field(default_factory=list)
+    resumed: list[str] = field(default_factory=list)
+
+
+def _unfinished(job: RobotJob, error: BaseException) -> dict[str, Any]:
+    return {"name": job.name, "verdict": "failed", "html": None, "recording": {"source": job.source.describe()},
+            "reasons": [f"the check did not finish: {type(error).__name__}: {' '.join(str(error).split())[:200]}"]}
 
 
 def run_fleet(jobs: list[RobotJob], *, workers: int, scheduler: str | None = None,
-              progress: ProgressCallback | None = None) -> list[dict[str, Any]]:
+              progress: ProgressCallback | None = None, journal: Journal | None = None,
+              resume: bool = False) -> FleetRun:
     """Every robot's :func:`run_robot` row, one task each on Dask (a scheduler, else a local cluster of
-    ``workers`` processes), sorted most severe first (then by name)."""
-    rows: list[dict[str, Any]] = []
-    report(progress, 0, len(jobs), "checking robots")
-    with open_runner(workers=min(workers, len(jobs)), scheduler=scheduler, dask=True) as runner:
-        for outcome in runner.as_completed(run_robot, jobs):
-            if outcome.error is not None:  # the task itself died (a worker lost): the robot is named, not judged
-                rows.append({"name": outcome.item.name, "verdict": "failed", "html": None,
-                             "reasons": [f"the check did not finish: {type(outcome.error).__name__}: "
-                                         f"{' '.join(str(outcome.error).split())[:200]}"]})
-            else:
-                rows.append(outcome.result or {})
-            report(progress, len(rows), len(jobs), "checking robots")
-    return sorted(rows, key=lambda r: (SEVERITY.index(r["verdict"]), r["name"]))
+    ``workers`` processes), sorted most severe first (then by name).
+
+    Args:
+        journal: where each finished row is persisted as it arrives (atomically).
+        resume: take the rows the journal already holds for unchanged jobs instead of checking them again.
+    """
+    keys = {job.name: job_key(job) for job in jobs}
+    finished = journal.finished(keys) if journal is not None and resume else {}
+    todo = [job for job in jobs if job.name not in finished]
+    run = FleetRun(rows=list(finished.values()), resumed=sorted(finished))
+    report(progress, len(run.rows), len(jobs), "checking robots")
+    if todo:
+        with open_runner(workers=min(workers, len(todo)), scheduler=scheduler, dask=True) as runner:
+            for outcome in runner.as_completed(run_robot, todo):
+                row = _unfinished(outcome.item, outcome.error) if outcome.error is not None else outcome.result
+                run.rows.append(row or {})
+                if journal is not None and outcome.error is None:  # a task lost with its worker is run again
+                    journal.add(row or {}, keys[outcome.item.name])
+                run.lost_workers = list(runner.lost_workers)
+                report(progress, len(run.rows), len(jobs), "checking robots")
+    run.rows.sort(key=lambda r: (SEVERITY.index(r["verdict"]), r["name"]))
+    return run

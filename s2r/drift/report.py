@@ -81,8 +81,11 @@ def check_report_html(result: DriftResult, *, source: str) -> str:
                          subtitle="Is this stereo calibration still right? (target-less, from ordinary scenes)")
 
 
-def fleet_report_html(rows: Sequence[dict[str, Any]], *, fleet_file: Path) -> str:
-    """The fleet summary page: one row per robot, most severe first, each linking nothing (reports sit beside)."""
+def fleet_report_html(rows: Sequence[dict[str, Any]], *, fleet_file: Path, lost_workers: Sequence[str] = (),
+                      resumed: Sequence[str] = (), trends: dict[str, dict[str, Any]] | None = None) -> str:
+    """The fleet summary page: one row per robot, most severe first (each robot's report sits in its folder);
+    the workers lost and the robots taken from an interrupted run; with ``trends`` (robot -> ``points`` and
+    :func:`~s2r.drift.fleet_store.trend_summary`), each robot's rotation over the runs, one small plot each."""
     table = html_table(
         ["robot", "verdict", "pitch (deg)", "yaw (deg)", "roll (deg)", "matches", "why", "report"],
         [[r["name"], r["verdict"], *(_axis(r, a) for a in AXES), r.get("matches", ""), "; ".join(r["reasons"]),
@@ -91,9 +94,78 @@ def fleet_report_html(rows: Sequence[dict[str, Any]], *, fleet_file: Path) -> st
     counts = {v: sum(r["verdict"] == v for r in rows) for v in ("drifted", "failed", "cannot tell", "good")}
     banner = "pass" if counts["good"] == len(rows) else "fail" if counts["drifted"] or counts["failed"] else "warn"
     summary = ", ".join(f"{n} {v}" for v, n in counts.items() if n)
-    return render_report("s2r fleet check", [ReportSection(
-        "Fleet", banner=(banner, f"{len(rows)} robots: {summary}"), tables=[table],
-        paragraphs=[f"Fleet file: {fleet_file}. Each robot's own report is in its folder. {BLIND_SPOTS}"])])
+    notes = [f"Fleet file: {fleet_file}. Each robot's own report is in its folder. {BLIND_SPOTS}"]
+    if lost_workers:
+        notes.append(f"{len(lost_workers)} Dask worker(s) lost during the run ({', '.join(lost_workers)}): their "
+                     "robots were run again on the other workers.")
+    if resumed:
+        notes.append(f"{len(resumed)} robot(s) were taken from the interrupted run this one resumed.")
+    sections = [ReportSection("Fleet", banner=(banner, f"{len(rows)} robots: {summary}"), tables=[table],
+                              paragraphs=notes)]
+    if trends:
+        sections.append(_trend_section(rows, trends))
+    return render_report("s2r fleet check", sections)
+
+
+#: Robots given a trend plot on the page (the most severe first); the table covers every robot.
+MAX_TREND_PLOTS = 200
+
+
+def _days_text(value: Any) -> str:
+    return "" if value is None else f"{value:.0f}" if value >= 10 else f"{value:.1f}"
+
+
+def _trend_section(rows: Sequence[dict[str, Any]], trends: dict[str, dict[str, Any]]) -> ReportSection:
+    names = [r["name"] for r in rows if r["name"] in trends]
+    table = html_table(
+        ["robot", "runs", *(f"{a} rate (deg/day)" for a in AXES), "days to tolerance (nearest axis)", "verdicts"],
+        [[n, trends[n]["runs"], *(_rate(trends[n], a) for a in AXES), _days_text(_nearest(trends[n])),
+          " ".join(_VERDICT_MARK.get(p.get("verdict"), "?") for p in trends[n]["points"])] for n in names],
+        caption="Trend over the runs kept in the history (rate: least-squares line; days: at that rate, when it "
+        "heads towards the tolerance)", left=[0, len(AXES) + 3])
+    images = [(f"{n}: rotation error over the runs (deg)", _trend_figure(n, trends[n]["points"]))
+              for n in names[:MAX_TREND_PLOTS] if len(trends[n]["points"]) >= 2]
+    note = [f"Plots for the first {MAX_TREND_PLOTS} robots (most severe first)."] \
+        if len(names) > MAX_TREND_PLOTS else []
+    return ReportSection("Trend per robot", paragraphs=["Verdicts oldest first: G good, D drifted, ? cannot tell, "
+                         "F failed. A slow drift shows as a rate before it crosses the tolerance.", *note],
+                         tables=[table], images=images)
+
+
+_VERDICT_MARK = {"good": "G", "drifted": "D", "cannot tell": "?", "failed": "F"}
+
+
+def _rate(trend: dict[str, Any], axis: str) -> str:
+    value = (trend.get("rate_deg_per_day") or {}).get(axis)
+    return "" if value is None else f"{value:+.4f}"
+
+
+def _nearest(trend: dict[str, Any]) -> float | None:
+    days = [d for d in (trend.get("days_to_tolerance") or {}).values() if d is not None]
+    return min(days) if days else None
+
+
+def _trend_figure(name: str, points: Sequence[dict[str, Any]]) -> str:
+    """A small plot: pitch, yaw and roll (deg) against the run, the tolerance as a band, drifted runs marked."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(4.2, 1.9), layout="constrained")
+    runs = np.arange(len(points))
+    for axis, colour in zip(AXES, ("tab:blue", "tab:orange", "tab:green"), strict=True):
+        values = [np.nan if p["rotation_error_deg"].get(axis) is None else p["rotation_error_deg"][axis]
+                  for p in points]
+        ax.plot(runs, values, marker="o", markersize=3, color=colour, label=axis)
+    tolerance = [v for v in (points[-1].get("tolerance_deg") or {}).values() if isinstance(v, (int, float))]
+    if tolerance:
+        ax.axhspan(-max(tolerance), max(tolerance), color="0.9", zorder=0)
+    for k, p in enumerate(points):
+        if p.get("verdict") == "drifted":
+            ax.axvline(k, color="tab:red", alpha=0.25, linewidth=3, zorder=0)
+    ax.set_title(name, fontsize=8)
+    ax.set_xticks(runs, [str(p["time"])[:10] for p in points], fontsize=6, rotation=30)
+    ax.tick_params(axis="y", labelsize=6)
+    ax.legend(fontsize=6, loc="upper left")
+    return figure_to_data_uri(fig, dpi=80)
 
 
 def _axis(row: dict[str, Any], axis: str) -> str:

@@ -173,7 +173,8 @@ def test_a_fleet_output_is_published_whole_or_not_at_all(capsys: pytest.CaptureF
     (out / "summary.json").mkdir(parents=True)  # in the way of the last-but-one file, even with --force
     assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 2
     assert "summary.json" in _err(capsys)
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]  # no robot folder, no index.html
+    # no robot folder, no index.html; only the journal of the finished robots, for --resume
+    assert sorted(p.name for p in out.iterdir()) == [".s2r-fleet-journal", "summary.json"]
     (out / "summary.json").rmdir()
     assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 1
     assert sorted(p.name for p in out.iterdir()) == ["a", "b", "index.html", "summary.json"]
