@@ -32,7 +32,6 @@ Each row carries ``recording``: where it was read, the number of pairs and a SHA
 from __future__ import annotations
 
 import hashlib
-import re
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
