@@ -239,13 +239,15 @@ def test_validate_chooses_mjcf_cameras_and_says_mjcf_things(tmp_path: Path,
     (tmp_path / "rig.xml").write_text(_MJCF_RIG)
     assert _error(capsys, ["validate", str(tmp_path / "rig.xml"), "realsense_d435_848x480", "--quick"]) == (
         f"error: {tmp_path / 'rig.xml'}: <camera>: cannot choose the stereo pair by itself; found 3 camera(s): rgb, "
-        "ir_left, ir_right (pass --left NAME --right NAME with two of the listed cameras)")
-    assert _error(capsys, ["validate", str(tmp_path / "rig.xml"), "realsense_d435_848x480", "--left", "ir_left"]) == (
-        "error: --left/--right: --left and --right name the pair together (pass both, e.g. --left left_cam --right "
-        "right_cam)")
-    assert _error(capsys, ["validate", "gazebo_dual_camera", "realsense_d435_848x480", "--left", "a", "--right",
-                           "b"]).startswith("error: --left/--right: --left/--right choose the cameras of a robot "
-                                            "description, and SIM is a profile")
+        "ir_left, ir_right (pass --sim-left NAME --sim-right NAME with two of the listed cameras)")
+    assert _error(capsys, ["validate", str(tmp_path / "rig.xml"), "realsense_d435_848x480", "--sim-left",
+                           "ir_left"]) == (
+        "error: --sim-left/--sim-right: --sim-left and --sim-right name the pair together (pass both, e.g. "
+        "--sim-left left_cam --sim-right right_cam)")
+    assert _error(capsys, ["validate", "gazebo_dual_camera", "realsense_d435_848x480", "--sim-left", "a",
+                           "--sim-right", "b"]).startswith("error: --sim-left/--sim-right: --sim-left/--sim-right "
+                                                           "choose the cameras of a robot description, and SIM is a "
+                                                           "profile")
     (tmp_path / "none.xml").write_text('<mujoco model="none"><worldbody><body name="b"><geom type="box" '
                                        'size=".1 .1 .1"/></body></worldbody></mujoco>\n')
     assert _error(capsys, ["validate", str(tmp_path / "none.xml"), "realsense_d435_848x480"]) == (
@@ -259,7 +261,7 @@ def test_validate_of_a_mujoco_sim_ends_with_the_export_of_the_users_real_file(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "rig.xml").write_text(_MJCF_RIG)
     real = _real_file(tmp_path)
-    assert main(["validate", str(tmp_path / "rig.xml"), str(real), "--left", "ir_left", "--right", "ir_right",
+    assert main(["validate", str(tmp_path / "rig.xml"), str(real), "--sim-left", "ir_left", "--sim-right", "ir_right",
                  "--quick", "-q"]) == 1
     out = capsys.readouterr().out
     assert "export-gazebo" not in out and "horizontal_fov" not in out and "hackBaseline" not in out

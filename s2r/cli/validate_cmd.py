@@ -23,7 +23,7 @@ from s2r.cli._common import (
     print_json,
 )
 from s2r.cli._recording import add_recording_arguments, spec_from_args
-from s2r.errors import ValidateError
+from s2r.errors import S2RError, ValidateError
 from s2r.fileio import prepare_output_dir
 
 __all__ = ["register"]
@@ -62,9 +62,10 @@ def register(sub: Any) -> None:
     parser.add_argument("--pattern", type=argparse_type(parse_pattern), default=(9, 6),
                         help="--recording board's inner corners COLSxROWS (default 9x6)")
     parser.add_argument("--square", type=float, default=0.025, help="--recording board's square size, m (0.025)")
-    parser.add_argument("--left", metavar="CAM", help="SIM a robot description (URDF / xacro / SDF / MJCF): its left "
-                        "camera (sensor, camera or link name), as s2r profile from-description --left takes it")
-    parser.add_argument("--right", metavar="CAM", help="SIM a robot description: its right camera")
+    parser.add_argument("--sim-left", metavar="CAM", help="SIM a robot description (URDF / xacro / SDF / MJCF): its "
+                        "left camera (sensor, camera or link name), as s2r profile from-description --left takes it "
+                        "(--left/--right here are the real recording's images)")
+    parser.add_argument("--sim-right", metavar="CAM", help="SIM a robot description: its right camera")
     parser.add_argument("--roles-as-given", action="store_true",
                         help="compare even when SIM is not a simulated profile or REAL is one (provenance.origin); "
                         "e.g. two sim variants")
@@ -91,7 +92,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     if args.seed < 0:  # numpy's generators take non-negative seeds only (was an internal error)
         raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)
-    sim = _load_sim(args.sim, left=args.left, right=args.right)
+    sim = _load_sim(args.sim, left=args.sim_left, right=args.sim_right)
     if args.sensor_model is not None:
         from s2r.sensor.files import load_sensor_model
 
@@ -172,15 +173,23 @@ def _load_sim(name_or_path: str, *, left: str | None = None, right: str | None =
 
     if not is_robot_description(name_or_path):
         if left is not None or right is not None:
-            raise ValidateError("--left/--right choose the cameras of a robot description, and SIM is a profile",
-                                field="--left/--right", hint="drop them, or pass the description file as SIM")
+            raise ValidateError("--sim-left/--sim-right choose the cameras of a robot description, and SIM is a "
+                                "profile", field="--sim-left/--sim-right",
+                                hint="drop them, or pass the description file as SIM")
         return load_profile(name_or_path)
     if (left is None) != (right is None):
-        raise ValidateError("--left and --right name the pair together", field="--left/--right",
-                            hint="pass both, e.g. --left left_cam --right right_cam")
+        raise ValidateError("--sim-left and --sim-right name the pair together", field="--sim-left/--sim-right",
+                            hint="pass both, e.g. --sim-left left_cam --sim-right right_cam")
     from s2r.sources.profile_builder import load_description_profile
 
-    profile = load_description_profile(name_or_path, left=left, right=right)
+    try:
+        profile = load_description_profile(name_or_path, left=left, right=right)
+    except S2RError as error:  # the loader names from-description's options; validate's are --sim-left/--sim-right
+        if error.hint and "--left NAME --right NAME" in error.hint:
+            raise type(error)(error.message, path=error.path, field=error.field,
+                              hint=error.hint.replace("--left NAME --right NAME", "--sim-left NAME --sim-right NAME")
+                              ) from error
+        raise
     logger.warning("%s: a robot description: SIM is the profile s2r profile from-description derives from it "
                    "(%s convention)", name_or_path, profile.provenance.convention)
     return profile
