@@ -53,10 +53,11 @@ def _bomb(tmp: Path) -> Any:
 def test_hostile_bag_messages_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str], case: str) -> None:
     if case == "bomb":
         bag = _bag(tmp_path / "h.bag", _bomb(tmp_path), "sensor_msgs/msg/CompressedImage")
-        expected = "30000x30000"
+        expected: tuple[str, ...] = ("30000x30000",)
     else:
         bag = _bag(tmp_path / "h.bag", _short_data if case == "short" else _unknown_encoding, "sensor_msgs/msg/Image")
-        expected = "cannot be decoded"
+        # with a profile (depth-quality) the one size rule refuses the declared size before decoding
+        expected = ("cannot be decoded", "declares 100000x100000 px" if case == "short" else "is 4x4 px but the")
     runs = [["calibrate", "--bag", str(bag), "--left-topic", LEFT, "--right-topic", RIGHT, "--pattern", "9x6",
              "--square", "0.025", "-o", str(tmp_path / "p.yaml")],
             ["depth-quality", "realsense_d435_848x480", "--bag", str(bag), "--left-topic", LEFT, "--right-topic",
@@ -65,5 +66,5 @@ def test_hostile_bag_messages_are_one_line(tmp_path: Path, capsys: pytest.Captur
         code = main(argv)
         err = capsys.readouterr().err
         assert code == 2, (argv[0], err)
-        assert expected in err and "Traceback" not in err, err
+        assert any(e in err for e in expected) and "Traceback" not in err, err
         assert len(err.strip().splitlines()) == 1, err
