@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
-from urllib.parse import unquote, urlsplit
+from urllib.parse import quote, unquote, urlsplit
 
 from s2r.errors import S2RError
 
@@ -72,9 +72,11 @@ def check_url(url: str) -> str:
 
 
 def join(url: str, *names: str) -> str:
-    """``url`` with child ``names`` appended (each one path component)."""
+    """``url`` with child ``names`` appended (each one path component, percent-encoded except for ``s3://``,
+    whose keys are literal)."""
     base = url if url.endswith("/") else url + "/"
-    return base + "/".join(n.strip("/") for n in names)
+    literal = urlsplit(url).scheme.lower() == "s3"
+    return base + "/".join(n.strip("/") if literal else quote(n.strip("/"), safe="") for n in names)
 
 
 def _filesystem(url: str) -> Any:
@@ -115,7 +117,10 @@ def _stream(url: str, limit: int) -> Iterator[Iterator[bytes]]:
         _refuse_special(url)
     fs = _filesystem(url)
     try:
-        handle = fs.open(url, "rb", block_size=0, size=1) if scheme.startswith("http") else fs.open(url, "rb")
+        if scheme.startswith("http"):
+            handle = fs.open(url, "rb", block_size=0, size=1)  # a stream: no HEAD first, no range requests
+        else:
+            handle = fs.open(str(_local_path(url)) if scheme == "file" else url, "rb")
     except FileNotFoundError:
         raise RemoteError("not found", path=url, hint="check the URL") from None
     except Exception as exc:  # aiohttp / botocore errors are not OSError: name them in one line

@@ -11,7 +11,7 @@ import pytest
 from s2r.cli import main
 from s2r.drift.check import CheckSettings
 from s2r.drift.fleet import load_fleet, run_robot
-from s2r.recordings.remote import RemoteError, copy_to, list_folder
+from s2r.recordings.remote import RemoteError, copy_to, join, list_folder
 from tests.drift.fleet_cluster import http_server
 
 
@@ -78,3 +78,16 @@ def test_s3_without_the_s3fs_extra_is_named_per_robot(tmp_path: Path, drift_rig_
     assert row["verdict"] == "failed"
     assert row["reasons"] == ["s3://fleet-logs/a/: reading s3:// needs s3fs (pip install 's2r[s3]') "
                               "(install it on every worker)"]
+
+
+def test_names_that_need_percent_encoding_are_listed_and_read(tmp_path: Path) -> None:
+    served = tmp_path / "served" / "left"
+    served.mkdir(parents=True)
+    (served / "a b#1.png").write_bytes(b"12345")
+    with http_server(tmp_path / "served") as base:
+        (entry,) = list_folder(f"{base}/left/")
+        assert entry.name == "a b#1.png"
+        copy = copy_to(join(f"{base}/left/", entry.name), tmp_path / "copy.png", limit=5)
+    assert copy.read_bytes() == b"12345"
+    assert copy_to(join((tmp_path / "served").as_uri(), "left", "a b#1.png"), tmp_path / "c2", limit=5).read_bytes() \
+        == b"12345"
