@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.s2r-installed
 BYTECODE := $(VENV)/.s2r-bytecode
 
-.PHONY: lock test demo lint typecheck pytest test-browser test-recordings test-ros bench profiles calibration-sample clean
+.PHONY: lock test librealsense-deps demo lint typecheck pytest test-browser test-recordings test-ros bench profiles calibration-sample clean
 
 # Installs the tested versions: requirements.lock pins every package (pyproject.toml keeps ranges for users who
 # `pip install s2r`). `make lock` refreshes it from today's releases; commit it only after `make test` is green.
@@ -36,7 +36,12 @@ $(BYTECODE): $(STAMP) $(shell find s2r -name '*.py')
 	$(BIN)/python -m compileall -q s2r
 	touch $(BYTECODE)
 
-test: $(STAMP) $(BYTECODE) lint typecheck pytest
+test: $(STAMP) $(BYTECODE) librealsense-deps lint typecheck pytest
+
+# pyrealsense2 (it writes the RealSense .db3 test recordings) loads libusb-1.0 at import; without it those tests skip.
+librealsense-deps:
+	@dpkg -s libusb-1.0-0 >/dev/null 2>&1 || (apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y \
+		--no-install-recommends libusb-1.0-0) || echo "libusb-1.0-0 not installed: the pyrealsense2 tests will skip"
 
 lint: $(STAMP)
 	$(BIN)/ruff check s2r tests bench
