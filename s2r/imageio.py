@@ -25,11 +25,6 @@ from numpy.typing import NDArray
 from s2r.fileio import NotARegularFile, read_regular_file
 from s2r.limits import MAX_IMAGE_PX
 
-try:  # ISA-L's inflate: 4x zlib's on camera images (the PNG shortcut below); without it libpng decodes them
-    from isal import isal_zlib as _inflate
-except ImportError:  # pragma: no cover - a platform without an isal wheel
-    _inflate = None  # type: ignore[assignment]
-
 __all__ = ["MAX_SIDE_PX", "declared_size", "decode_image_file", "native_stderr_silenced", "oversize_reason",
            "silence_opencv_log", "size_mismatch_reason"]
 
@@ -118,82 +113,6 @@ def _plain_grey_png(data: bytes, chunks: Sequence[bytes] | None = None) -> bool:
     return b"eXIf" not in chunks
 
 
-#: Chunks a plain grey PNG may carry for :func:`_grey_png_rows`: the image's own and metadata libpng leaves
-#: out of the pixels OpenCV returns (text, time, pixel size); any other takes libpng's path.
-_SHORTCUT_CHUNKS = frozenset({b"IHDR", b"IDAT", b"IEND", b"tEXt", b"zTXt", b"iTXt", b"tIME", b"pHYs"})
-
-
-def _grey_png_rows(data: bytes, chunks: Sequence[bytes]) -> NDArray[np.uint8] | None:
-    """The (H, W) uint8 pixels of a plain grey PNG (:func:`_plain_grey_png`) decoded without libpng, or None to
-    leave it to libpng: same pixels, half the time of a 1280x720 camera image (8 ms -> 4 ms).
-
-    libpng's time goes to zlib's inflate (7 of 8 ms on a noisy image); ISA-L inflates the same stream 4x
-    faster. Rows filtered None, Sub or Up (OpenCV's writer: Sub throughout) are undone with numpy (a running
-    sum mod 256 along the row or down the column). Anything else goes to libpng, which decides as before: a
-    malformed or interlaced header, Average or Paeth rows, another chunk, a critical chunk whose CRC does not
-    match, a stream that is damaged, cut short, or inflates to more or fewer bytes than the rows need."""
-    if _inflate is None or data[8:12] != b"\x00\x00\x00\x0d" or data[26:29] != b"\x00\x00\x00" \
-            or not _SHORTCUT_CHUNKS.issuperset(chunks):  # IHDR of 13 bytes; deflate, adaptive filters, no interlace
-        return None
-    width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
-    if width == 0 or height == 0:
-        return None
-    view, parts, pos = memoryview(data), [], 8
-    while True:
-        length, kind = _CHUNK_HEADER.unpack_from(data, pos)
-        end = pos + 8 + length
-        if kind in (b"IHDR", b"IDAT", b"IEND") and _inflate.crc32(view[pos + 4:end]) != int.from_bytes(
-                data[end:end + 4], "big"):
-            return None
-        if kind == b"IDAT":
-            parts.append(view[pos + 8:end])
-        if kind == b"IEND":
-            break
-        pos = end + 4
-    stream, size = _inflate.decompressobj(), height * (width + 1)
-    try:  # never more than the rows need, plus one byte to tell a stream that holds more (a bomb)
-        raw = stream.decompress(b"".join(parts), size + 1)
-    except Exception:  # isal_zlib.error: a damaged stream (libpng then reports it)
-        return None
-    if not stream.eof or stream.unused_data or stream.unconsumed_tail or len(raw) != size:
-        return None
-    return _unfilter(np.frombuffer(raw, np.uint8).reshape(height, width + 1))
-
-
-def _unfilter(rows: NDArray[np.uint8]) -> NDArray[np.uint8] | None:
-    """Pixels (H, W) of 8-bit one-channel PNG rows (H, 1 + W: each row's filter byte, then its filtered bytes);
-    None when a row uses a filter other than None (0), Sub (1) or Up (2)."""
-    kinds = rows[:, 0]
-    if int(kinds.max(initial=0)) > 2:
-        return None
-    if bool(np.all(kinds == 1)):
-        return _running_sums(rows[:, 1:])
-    out = np.ascontiguousarray(rows[:, 1:])
-    sub = kinds == 1
-    out[sub] = _running_sums(out[sub])
-    up = np.flatnonzero(kinds == 2)
-    for run in np.split(up, np.flatnonzero(np.diff(up) != 1) + 1) if up.size else []:
-        a, b = int(run[0]), int(run[-1]) + 1  # rows a..b-1 each add the (decoded) row above
-        np.cumsum(out[a:b], axis=0, dtype=np.uint8, out=out[a:b])
-        if a > 0:
-            out[a:b] += out[a - 1]
-    return out
-
-
-def _running_sums(rows: NDArray[np.uint8]) -> NDArray[np.uint8]:
-    """Running sums mod 256 along each row of ``rows`` (H, W) uint8, exactly (PNG's Sub filter undone).
-
-    From OpenCV's integral image (int32, vectorised: 0.8 ms for 1280x720 against numpy's cumsum's 2.9 ms):
-    a row's running sum is the difference of two of its rows. Taken over bands of rows small enough that
-    no sum reaches 2^31."""
-    out = np.empty(rows.shape, np.uint8)
-    band = max(1, (2**31 - 1) // (255 * max(rows.shape[1], 1)))
-    for a in range(0, rows.shape[0], band):
-        sums = cv2.integral(rows[a:a + band])
-        np.subtract(sums[1:, 1:], sums[:-1, 1:], out=out[a:a + band], casting="unsafe")  # mod 256
-    return out
-
-
 def declared_size(data: bytes) -> tuple[int, int] | None:
     """(width, height) a PNG or JPEG header declares, before anything is decoded; None for other formats or a
     header too short to tell (OpenCV then judges the file)."""
@@ -260,10 +179,8 @@ def decode_image_file(path: str | Path, flags: int = cv2.IMREAD_UNCHANGED, *,
     with _native_stderr_silenced():
         image: NDArray[Any] | None = None
         if flags == cv2.IMREAD_GRAYSCALE and _plain_grey_png(data, chunks):  # as is: skips a converter copy
-            image = _grey_png_rows(data, chunks)
-            if image is None:
-                image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
-                image = image if image is not None and image.ndim == 2 and image.dtype == np.uint8 else None
+            image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+            image = image if image is not None and image.ndim == 2 and image.dtype == np.uint8 else None
         if image is None:
             image = cv2.imdecode(np.frombuffer(data, np.uint8), flags)
     if image is None:
