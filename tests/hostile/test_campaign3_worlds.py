@@ -41,7 +41,7 @@ def _world(folder: Path, name: str, body: str, *, asset: str = "", camera: str =
 
 def _render(tmp_path: Path, world: Path, *camera: str) -> subprocess.CompletedProcess[str]:
     return run_s2r("render", "scene", str(PROFILE), "--renderer", "mujoco", "--world", str(world), *camera,
-                   "--distances", "1", "-o", str(tmp_path / "out"), memory_bytes=_GL_CAP, timeout_s=60)
+                   "--distances", "1", "-o", str(tmp_path / "out"), memory_bytes=_GL_CAP, timeout_s=90)
 
 
 def _refused(tmp_path: Path, done: subprocess.CompletedProcess[str], *fragments: str) -> None:
