@@ -60,7 +60,7 @@ _BACKGROUND_FRACTION = 0.999
 #: Farthest a world camera may sit from the world's origin (metres): past it float32 GL loses the scene.
 MAX_WORLD_M = 1e4
 #: Limits of the child process that compiles a world once before it is rendered.
-COMPILE_LIMITS = Limits(cpu_s=60, memory_bytes=2 << 30, wall_s=120.0)
+COMPILE_LIMITS = Limits(cpu_s=20, memory_bytes=2 << 30, wall_s=60.0)
 _DEFAULT_SCENE_POSE = np.array([[0.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0],
                                 [0.0, 0.0, 0.0, 1.0]])
 

@@ -15,8 +15,9 @@ reads an MJCF:
   and opens no file itself. A ``<model file>`` sub-model (whose own files MuJoCo would open) is refused.
 - **Sizes**: the pixels every texture declares (builtin ``width`` x ``height``, a PNG's header; x6 for cube maps)
   and every height field's samples are summed and bounded (:data:`MAX_TEXTURE_PIXELS`, :data:`MAX_HFIELD_SAMPLES`)
-  before MuJoCo allocates anything. What no attribute tells (a mesh's hull, ``<replicate>``, a flexcomp's count) is
-  bounded by compiling once in a limited child process (:mod:`s2r.render._mujoco`).
+  before MuJoCo allocates anything, and so are the elements ``<replicate>`` expands to. What no attribute tells (a
+  mesh's hull, a flexcomp's count) is bounded by compiling once in a limited child process
+  (:mod:`s2r.render._mujoco`).
 """
 
 from __future__ import annotations
@@ -34,8 +35,8 @@ from s2r.sources.mjcf_include import expand_includes
 from s2r.sources.mjcf_pose import where
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["MAX_ASSET_BYTES", "MAX_ASSET_FILES", "MAX_HFIELD_SAMPLES", "MAX_TEXTURE_PIXELS", "WorldFiles",
-           "read_world"]
+__all__ = ["MAX_ASSET_BYTES", "MAX_ASSET_FILES", "MAX_HFIELD_SAMPLES", "MAX_REPLICATED_ELEMENTS",
+           "MAX_TEXTURE_PIXELS", "WorldFiles", "read_world"]
 
 #: Bytes of asset files (meshes, textures, height fields, skins) one world may read in all.
 MAX_ASSET_BYTES = 256 << 20
@@ -45,6 +46,8 @@ MAX_ASSET_FILES = 1024
 MAX_TEXTURE_PIXELS = 1 << 26
 #: Height-field samples (all height fields) one world may declare.
 MAX_HFIELD_SAMPLES = 1 << 24
+#: Elements one world may hold once ``<replicate count>`` (nested: multiplied) is expanded.
+MAX_REPLICATED_ELEMENTS = 100_000
 _HINT = "keep the world's files inside its folder, and its textures and height fields of a usual size"
 _CUBE_TYPES = ("cube", "skybox")
 
@@ -156,6 +159,21 @@ def _take_files(world: WorldFiles, doc: XmlDoc, node: ET.Element) -> None:
         node.set(attr, key)
 
 
+def _check_replicates(doc: XmlDoc) -> None:
+    """Refuse a world whose ``<replicate>`` counts (multiplied when nested) expand past
+    :data:`MAX_REPLICATED_ELEMENTS` elements (1000 x 1000 geoms: minutes of compiling)."""
+    total = 0
+    stack: list[tuple[ET.Element, int]] = [(doc.root, 1)]
+    while stack:
+        node, factor = stack.pop()
+        total += factor
+        if total > MAX_REPLICATED_ELEMENTS:
+            raise RenderError(f"the world expands to more than {MAX_REPLICATED_ELEMENTS} elements (<replicate> "
+                              "counts multiply)", path=doc.path, field=where(doc, node), hint=_HINT)
+        inner = factor * max(_int_attr(doc, node, "count"), 1) if node.tag == "replicate" else factor
+        stack.extend((child, inner) for child in node)
+
+
 @lru_cache(maxsize=4)
 def read_world(scene_path: str) -> WorldFiles:
     """The world ``scene_path`` as MuJoCo should compile it (module docstring), read once per process.
@@ -170,6 +188,7 @@ def read_world(scene_path: str) -> WorldFiles:
         raise RenderError(f"expected a <mujoco> root element, got <{str(doc.root.tag)[:40]}>", path=path,
                           field="--world", hint="pass an MJCF world")
     world = WorldFiles(xml="", assets={}, path=path, files=expand_includes(doc))
+    _check_replicates(doc)
     for node in doc.root.iter():
         _check_sizes(world, doc, node)
         _take_files(world, doc, node)

@@ -41,7 +41,7 @@ def _world(folder: Path, name: str, body: str, *, asset: str = "", camera: str =
 
 def _render(tmp_path: Path, world: Path, *camera: str) -> subprocess.CompletedProcess[str]:
     return run_s2r("render", "scene", str(PROFILE), "--renderer", "mujoco", "--world", str(world), *camera,
-                   "--distances", "1", "-o", str(tmp_path / "out"), memory_bytes=_GL_CAP, timeout_s=60)
+                   "--distances", "1", "-o", str(tmp_path / "out"), memory_bytes=_GL_CAP, timeout_s=90)
 
 
 def _refused(tmp_path: Path, done: subprocess.CompletedProcess[str], *fragments: str) -> None:
@@ -113,6 +113,8 @@ def test_class_8_a_fifo_include_answers_at_once(tmp_path: Path) -> None:
     ('<texture name="t" builtin="gradient" width="12000" height="12000"/>', "texture pixels"),  # a cube: 6 faces
     ('<texture name="t" type="2d" file="big.png"/>', "400000000 texture pixels"),
     ('<hfield name="h" nrow="100000" ncol="100000" size="1 1 1 1"/>', "height-field samples"),
+    ('</asset><worldbody><replicate count="1000" offset="0.01 0 0"><replicate count="1000" offset="0 0.01 0">'
+     '<geom size="0.001"/></replicate></replicate></worldbody><asset>', "more than 100000 elements"),
 ])
 def test_class_9_textures_and_height_fields_are_bounded_before_mujoco(tmp_path: Path, asset: str,
                                                                      fragment: str) -> None:
