@@ -85,7 +85,8 @@ def test_the_profile_is_the_first_positional_of_sensor_fit_and_apply(capsys: pyt
     # the profile is read first: a missing recording is the next error either way, the alias still works
     assert main(["sensor", "fit", "realsense_d435_848x480", "--pattern", "9x6", "--square", "0.025",
                  "-o", str(tmp_path / "s.yaml")]) == 2
-    assert capsys.readouterr().err.strip() == "error: --left: missing left images (pass --left DIR|GLOB (or --bag))"
+    assert capsys.readouterr().err.strip() == ("error: --left: missing left images (pass --left DIR|GLOB (or a "
+                                               "recording))")
     assert main(["sensor", "apply", "no_such_rig", str(tmp_path / "s.yaml"), str(tmp_path), "-o",
                  str(tmp_path / "out")]) == 2
     assert "no_such_rig" in capsys.readouterr().err

@@ -96,11 +96,18 @@ def check_target_options(args: argparse.Namespace) -> None:
 
 
 def _check_output(args: argparse.Namespace) -> None:
-    """Refuse an output that is the input folder."""
-    folder = args.recording
-    if folder is not None and args.output.resolve() == Path(folder).resolve():
-        raise DepthError("the output is the input folder", path=args.output, field="--output",
-                         hint="choose another -o")
+    """Refuse an output that is or holds an input (the folder, a bag, a video), or lies inside a bag folder: even
+    ``--force`` must never replace the recording it reads."""
+    out = args.output.resolve()
+    for option in ("recording", "bag", "video", "left_video", "right_video", "left", "right"):
+        given = getattr(args, option, None)
+        if given is None or any(ch in str(given) for ch in "*?["):
+            continue
+        source = Path(given).resolve()
+        if out == source or out in source.parents or (option == "bag" and source in out.parents):
+            flag = "FOLDER" if option == "recording" else "--" + option.replace("_", "-")
+            raise DepthError(f"the output is the input ({flag} {given}) or overlaps it", path=args.output,
+                             field="--output", hint="choose an -o outside the recording")
 
 
 def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:

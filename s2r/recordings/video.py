@@ -35,6 +35,10 @@ __all__ = ["LAYOUTS", "TwoVideoFrames", "VideoFrames"]
 #: Single-file layouts: side by side (left | right) and top/bottom (left over right).
 LAYOUTS = ("sbs", "tb")
 _HINT = "pass a video file OpenCV reads (H.264 / mp4v .mp4, MJPG .avi, ...)"
+#: Containers whose frame count FFmpeg reads from an index (exact). Elsewhere (Matroska, WebM, MPEG-TS, ...) OpenCV
+#: estimates it from the duration and the frame rate, which an audio track longer than the video inflates: there
+#: the count is no evidence of truncation, and two videos are compared by the frames they decode.
+_INDEXED_SUFFIXES = frozenset({".mp4", ".m4v", ".mov", ".avi"})
 
 
 class _Capture:
@@ -61,7 +65,8 @@ class _Capture:
                         field=option, hint=_HINT)
         self.width = int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH))
         self.height = int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
-        self.count = max(0, int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT)))
+        declared = max(0, int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT)))
+        self.count = declared if self.path.suffix.lower() in _INDEXED_SUFFIXES else 0  # 0: unknown (an estimate)
         self.fps = float(self.cap.get(cv2.CAP_PROP_FPS))
         if self.width <= 0 or self.height <= 0:
             self.release()

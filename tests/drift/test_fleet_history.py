@@ -1,6 +1,7 @@
-"""--history: two nights of a fleet whose robot "creep" turns further each night (pitch 0.03 deg, then 0.07 deg,
-tolerance 0.1: good both nights) beside a steady robot; the trend shows the creep's rate and the days left before
-it crosses the tolerance, in summary.json and as a plot per robot in index.html."""
+"""--history: two nights of a fleet whose robot "creep" turns further each night (pitch 0.03 deg, then 0.07 deg;
+tolerance 0.1 deg, and 5 px so that the degrees decide: good both nights) beside a steady robot; the trend shows the
+creep's rate and the days left before it crosses the tolerance, in summary.json and as a plot per robot in
+index.html."""
 
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ def test_two_nights_show_a_drift_that_grows_before_it_crosses_the_tolerance(
              "recording": {"folder": str(recordings["same"]), "max_frames": 3}}]}))
         out = tmp_path / f"night{night}"
         code = main(["fleet", "check", str(fleet), "-o", str(out), "--history", str(history), "--tolerance", "0.1",
-                     "--workers", "1", "--json"])
+                     "--tolerance-px", "5", "--workers", "1", "--json"])  # the degrees decide here, not the rows
         summary = json.loads(capsys.readouterr().out)
         assert code == 0, summary
         if night == 0:  # the first night moved a day back, as if it had run yesterday

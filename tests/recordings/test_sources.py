@@ -3,6 +3,8 @@ the declared size checked before decoding (videos made by OpenCV's writer and ff
 
 from __future__ import annotations
 
+import shutil
+import subprocess
 from pathlib import Path
 
 import cv2
@@ -147,8 +149,6 @@ def test_spec_needs_exactly_one_form() -> None:
 def test_truncated_streamable_mp4_stops_with_one_line(tmp_path: Path) -> None:
     """An H.264 .mp4 with its index first (``-movflags +faststart``, as streamed recordings are) opens when cut, and
     ends early: refused as truncated, not taken as a shorter recording."""
-    import shutil
-    import subprocess
 
     rng = np.random.default_rng(3)  # noise: the frames' data, not the index, fill the file
     whole = write_h264(tmp_path / "w.mp4", [rng.integers(0, 255, (48, 128, 3), dtype=np.uint8) for _ in range(24)])
@@ -161,3 +161,21 @@ def test_truncated_streamable_mp4_stops_with_one_line(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match=r"cut.mp4: --video: the video ends after \d+ of the 24 frames it "
                                              "declares: truncated"):
         list(open_recording(video=cut).frames())
+
+
+def test_an_estimated_frame_count_is_no_truncation(tmp_path: Path) -> None:
+    """Matroska has no frame index: OpenCV estimates the count from the duration (an audio track longer than the
+    video inflates it). The frames that decode are the recording; only indexed containers are held to their count."""
+    if shutil.which("ffmpeg") is None:
+        pytest.skip("ffmpeg is not installed (make test-recordings installs it)")
+    frames = [np.full((48, 128, 3), 40 * i, np.uint8) for i in range(5)]
+    video = write_cv(tmp_path / "v.avi", frames)
+    mkv = tmp_path / "v.mkv"
+    subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-i", str(video), "-f", "lavfi", "-t", "3", "-i",
+                    "anullsrc=r=8000:cl=mono", "-map", "0:v", "-map", "1:a", "-c:v", "copy", "-c:a", "pcm_s16le",
+                    str(mkv)], check=True)
+    cap = cv2.VideoCapture(str(mkv))
+    declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    cap.release()
+    got = list(open_recording(video=mkv, layout="sbs").frames())
+    assert len(got) == 5, f"OpenCV declared {declared}"
