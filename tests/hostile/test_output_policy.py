@@ -121,7 +121,7 @@ def test_full_disk_on_the_calibration_report_leaves_no_profile(tmp_path: Path) -
     assert main(["-q", "calibrate", str(tmp_path / "set"), *BOARD, "-o", str(out), "--jobs", "1"]) == 0
     out.unlink()
     done = run_s2r("-q", "calibrate", str(tmp_path / "set"), *BOARD, "-o", str(out), "--report", str(report),
-                   "--jobs", "1", file_size=64 << 10, timeout_s=60)
+                   "--jobs", "1", file_size=64 << 10, timeout_s=180)
     assert done.returncode == 2, done.stderr
     assert "index.html: cannot write: File too large" in done.stderr and done.stderr.count("\n") == 1
     assert not out.exists() and not report.exists()  # the report folder it made, empty, is removed (issue 37)
