@@ -34,8 +34,8 @@ __all__ = ["HYPOTHESES", "SwapFinding", "find_swap"]
 FloatArray = NDArray[np.float64]
 HYPOTHESES = ("as given", "exchanged", "upside down", "upside down and exchanged")
 _FIX = {
-    "exchanged": "give the left images as right and the right ones as left (or swap the profile's cameras: "
-                 "s2r profile convert --swap)",
+    "exchanged": "give the left images as right and the right ones as left (the recording is mixed up, not the "
+                 "profile: swapping the profile's cameras would put its right camera on the left)",
     "upside down": "turn both images by 180 degrees before checking (or use the profile of the rig as mounted)",
     "upside down and exchanged": "turn both images by 180 degrees and exchange left and right",
 }
