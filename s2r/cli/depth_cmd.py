@@ -134,6 +134,10 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if sum((sequence, stream, args.pair_left is not None)) > 1:
         raise DepthError("give one input: LEFT RIGHT images, a recording, or --left-dir/--right-dir", field="LEFT",
                          hint="drop the others")
+    thinned = [flag for flag, on in (("--every", args.every != 1), ("--max-frames", args.max_frames is not None)) if on]
+    if thinned and not stream:
+        raise DepthError("applies to recordings only", field=thinned[0],
+                         hint="give the frames as a recording (FOLDER, --left/--right, --bag, --video, ...) or drop it")
     if not (sequence or stream) and args.pair_left is None:
         raise DepthError("missing images", field="LEFT RIGHT",
                          hint="pass PROFILE LEFT RIGHT, or PROFILE and a recording (FOLDER, --bag, --video, ...)")

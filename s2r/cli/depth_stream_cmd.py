@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -85,6 +86,10 @@ def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, st
     return source.frames(), source.describe()
 
 
+#: A global ROS graph-resource namespace (ROS 1 and ROS 2 naming rules): "/" or "/a/b_2" (no empty or digit-led parts).
+_ROS_NAMESPACE = re.compile(r"/|(/[A-Za-z][A-Za-z0-9_]*)+")
+
+
 def check_target_options(args: argparse.Namespace) -> None:
     """Refuse an option of another ``--to`` target: it would be ignored."""
     files = args.to == "files"
@@ -93,6 +98,10 @@ def check_target_options(args: argparse.Namespace) -> None:
     for option, given in misplaced:
         if given:
             raise DepthError(f"does not apply to --to {args.to}", field=option, hint=f"drop {option}")
+    if not _ROS_NAMESPACE.fullmatch(args.namespace):
+        raise DepthError(f"{args.namespace!r} is not a ROS namespace", field="--namespace",
+                         hint="'/' then names of letters, digits and _ each starting with a letter, e.g. /stereo or "
+                              "/robot1/front_stereo")
 
 
 def _check_output(args: argparse.Namespace) -> None:

@@ -137,3 +137,23 @@ def test_force_never_writes_over_the_input_bag(rec: tuple[Path, Path], tmp_path:
                      str(out), "--to", kind, "--force"]) == 2
         assert "the output is the input (--bag " in capsys.readouterr().err
     assert sorted((p.name, p.stat().st_size) for p in ([bag] if bag.is_file() else bag.iterdir())) == before
+
+
+def test_thinning_and_namespace_are_never_ignored(rec: tuple[Path, Path], tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """--every / --max-frames apply to recordings only, and --namespace must be a ROS namespace: either is refused
+    in one line rather than silently ignored or written into topic names."""
+    profile, folder = rec
+    left, right = folder / "left" / "00.png", folder / "right" / "00.png"
+    assert main(["depth", str(profile), str(left), str(right), "-o", str(tmp_path / "a"), "--every", "2"]) == 2
+    assert capsys.readouterr().err.startswith("error: --every: applies to recordings only")
+    assert main(["depth", str(profile), "--left-dir", str(folder / "left"), "--right-dir", str(folder / "right"),
+                 "-o", str(tmp_path / "b"), "--max-frames", "1"]) == 2
+    assert capsys.readouterr().err.startswith("error: --max-frames: applies to recordings only")
+    for bad in ("bad ns//", "/1st-cam", "stereo", "/a//b"):
+        assert main(["depth", str(profile), str(folder), "-o", str(tmp_path / "c"), "--to", "ros2",
+                     "--namespace", bad]) == 2
+        assert "is not a ROS namespace" in capsys.readouterr().err
+    assert main(["-q", "depth", str(profile), str(folder), "-o", str(tmp_path / "d"), "--to", "ros2",
+                 "--namespace", "/robot1/front_stereo", "--max-frames", "1"]) == 0
+    assert not (tmp_path / "a").exists() and not (tmp_path / "c").exists()
