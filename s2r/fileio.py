@@ -467,11 +467,7 @@ def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | (0 if follow_links else getattr(os, "O_NOFOLLOW", 0))
     fd = os.open(path, flags, dir_fd=dir_fd)
     try:
-        info = os.fstat(fd)
-        if stat.S_ISDIR(info.st_mode):
-            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
-        if not stat.S_ISREG(info.st_mode):
-            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+        info = _regular_file_info(fd, path)
         if info.st_size > limit:
             raise NotARegularFile(f"{info.st_size} bytes, over the {limit >> 20} MiB s2r reads for this input")
         with os.fdopen(fd, "rb", closefd=False) as fh:
@@ -486,16 +482,29 @@ def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None
         os.close(fd)
 
 
+def _regular_file_info(fd: int, path: str | Path) -> os.stat_result:
+    """``fstat`` of the open ``fd``: a folder is IsADirectoryError, a device, FIFO or socket NotARegularFile."""
+    info = os.fstat(fd)
+    if stat.S_ISDIR(info.st_mode):
+        raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+    if not stat.S_ISREG(info.st_mode):
+        raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+    return info
+
+
+@contextlib.contextmanager
+def _open_regular(path: str | Path) -> Iterator[io.BufferedReader]:
+    """``path`` opened for reading without blocking (a FIFO cannot hang the open), checked to be a regular file."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as handle:
+        _regular_file_info(fd, path)
+        yield handle
+
+
 def read_file_head(path: str | Path, nbytes: int) -> bytes:
     """The first ``nbytes`` of the regular file ``path`` (all of it when shorter): a header to judge before the
     whole file is read. Opened without blocking; a device, FIFO or socket is :class:`NotARegularFile`."""
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(fd)
-        if stat.S_ISDIR(info.st_mode):
-            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
-        if not stat.S_ISREG(info.st_mode):
-            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+    with _open_regular(path) as handle:
         return handle.read(nbytes)
 
 
@@ -516,13 +525,8 @@ def read_npy(path: str | Path, *, limit: int = MAX_NPY_BYTES) -> NDArray[Any]:
         ValueError: a malformed header, a refused dtype, a shape over ``limit`` or a truncated file.
         OSError: missing, unreadable, a folder.
     """
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(fd)
-        if stat.S_ISDIR(info.st_mode):
-            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
-        if not stat.S_ISREG(info.st_mode):
-            raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
+    with _open_regular(path) as handle:
+        info = os.fstat(handle.fileno())
         version = np.lib.format.read_magic(handle)
         if version == (1, 0):
             shape, fortran, dtype = np.lib.format.read_array_header_1_0(handle)
