@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 from s2r._version import __version__
 from s2r.geometry import ORTHONORMAL_TOL, check_rotation, rotation_angle_rad
 from s2r.limits import MAX_IMAGE_PX, MIN_IMAGE_PX
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = [
     "CENTRE_OFFSET_PX",
@@ -402,7 +402,7 @@ class StereoProfile(_Model):
     matcher: MatcherSettings = MatcherSettings()
     simulation: SimulationSettings | None = None
     provenance: Provenance
-    #: The fitted sensor model (:mod:`s2r.sensor_model`, ``s2r sensor fit``): noise, blur, depth fill; optional.
+    #: The fitted sensor model (:mod:`s2r.sensor.model`, ``s2r sensor fit``): noise, blur, depth fill; optional.
     sensor: SensorModel | None = None
 
     @model_validator(mode="after")

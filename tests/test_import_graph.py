@@ -7,12 +7,14 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 
-#: Layer of each top-level module or subpackage; a module may import only from lower layers
-#: (or from itself). formats and sources share a layer and must not import each other; so do
-#: calib, depth and render.
+#: Layer of each unit -- a top-level module or subpackage, or a dotted part of one (``sensor.model``) that sits
+#: in another layer than its package; a module belongs to the longest unit its dotted name starts with. A module may
+#: import only from lower layers (or from its own unit). formats and sources share a layer and must not import each
+#: other; so do calib, depth and render.
 LAYERS: dict[str, int] = {
     "_version": 0, "errors": 0, "progress": 0, "limits": 0, "names": 0,
-    "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1, "sensor_model": 1,  # none of these import each other
+    "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1,  # none of these import each other
+    "sensor.model": 1,  # the sensor model's type, carried by profiles
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3,
     "formats": 4, "sources": 4,
@@ -20,20 +22,27 @@ LAYERS: dict[str, int] = {
     "registry": 5, "htmlreport": 5, "sensor": 5,  # sensor: applies a sensor model (render uses it)
     "calib": 6, "depth": 6, "render": 6,
     "compat": 7, "quality": 7, "drift": 7,
-    "validate": 8, "sensor_fit": 8,  # sensor_fit: fits a sensor model on recordings (uses quality)
+    "validate": 8, "sensor.fit": 8,  # sensor.fit: fits a sensor model on recordings (uses quality)
     "cli": 9, "__main__": 10, "__init__": 10,
 }
 CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
-             "quality", "drift", "sensor", "sensor_fit", "recordings"}
+             "quality", "drift", "sensor", "recordings"}
 PYBULLET_HOMES = {"render"}
 #: MuJoCo (an optional extra) is imported by one module only, lazily, when ``--renderer mujoco`` is asked for.
 MUJOCO_HOMES = {"render._mujoco"}
 
 
-def _unit(path: Path) -> str:
-    rel = path.relative_to(PACKAGE).with_suffix("")
-    parts = rel.parts
+def _unit_of(dotted: str) -> str:
+    """The longest unit in LAYERS that the dotted module name (without ``s2r.``) starts with."""
+    parts = dotted.split(".")
+    for n in range(len(parts), 0, -1):
+        if ".".join(parts[:n]) in LAYERS:
+            return ".".join(parts[:n])
     return parts[0]
+
+
+def _unit(path: Path) -> str:
+    return _unit_of(".".join(path.relative_to(PACKAGE).with_suffix("").parts))
 
 
 def module_imports(path: Path) -> list[str]:
@@ -64,7 +73,7 @@ def test_imports_run_one_way() -> None:
         for name in module_imports(path):
             if not name.startswith("s2r.") or name == "s2r":
                 continue
-            target = name.split(".")[1]
+            target = _unit_of(name.removeprefix("s2r."))
             if target == unit:
                 continue
             if LAYERS[target] >= LAYERS[unit]:

@@ -28,7 +28,7 @@ from s2r.render.rig import StereoJob, check_render_options, render_stereo_images
 from s2r.render.target_boards import TargetLayout, cut_views, target_layout
 from s2r.render.textures import checkerboard_texture, write_png
 from s2r.render.world import Surface, write_mesh
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 from s2r.targets import MAX_SQUARE_M, AnyTarget, CheckerboardTarget
 
 #: Share of views cut by the image edge for targets identified corner by corner (ChArUco, AprilGrid).

@@ -18,7 +18,7 @@ from s2r.render.poses import clip_planes
 from s2r.render.sensor import CameraSetup, Capture, capture
 from s2r.render.world import Surface
 from s2r.sensor.images import degrade_image
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["MAX_RENDER_PIXELS", "StereoJob", "check_render_options", "check_render_size", "finish_image",
            "render_stereo", "render_stereo_images", "stereo_setups"]

@@ -40,7 +40,7 @@ from s2r.render.rig import (
 )
 from s2r.render.sensor import Capture
 from s2r.render.world import Surface
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["SceneFrame", "render_boards_at", "render_scene", "write_scene"]
 

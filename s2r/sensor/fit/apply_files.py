@@ -21,7 +21,7 @@ from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, npy_bytes, prepare_output_dir
 from s2r.quality.inputs import read_depth
 from s2r.sensor.depth import degrade_depth
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["apply_to_files", "encode_depth"]
 

@@ -9,7 +9,7 @@
   1/12 DN^2, which is taken out.
 - Blur, from the board's edges: along every edge between two neighbouring inner corners (its middle 60 %), the
   grey level against the signed distance from the edge line is fitted with ``a + b Phi((d - delta) / s)``; the
-  median ``s`` over the edges is the edge spread (see :mod:`s2r.sensor_model`). It includes whatever the pixel's
+  median ``s`` over the edges is the edge spread (see :mod:`s2r.sensor.model`). It includes whatever the pixel's
   footprint adds: measured on 6 boards imaged by area-averaging 4x4 samples per pixel then blurred by sigma,
   ``s`` was sigma +8 % at 0.6 px and +0.5 % at 2 px; imaged by one sample per pixel (aliased), -6 % at 0.8 px
   and -24 % at 0.5 px (a discrete blur of an aliased edge is narrower than the blur).

@@ -1,7 +1,7 @@
-"""``s2r sensor fit``: a :class:`~s2r.sensor_model.SensorModel` from a chessboard recording.
+"""``s2r sensor fit``: a :class:`~s2r.sensor.model.SensorModel` from a chessboard recording.
 
 Image noise and blur come from the raw grey images (left and right of stereo pairs, or a device's left infrared
-images): :mod:`s2r.sensor_fit.images`. Depth figures come from device depth (:mod:`s2r.sensor_fit.depth`) or, for
+images): :mod:`s2r.sensor.fit.images`. Depth figures come from device depth (:mod:`s2r.sensor.fit.depth`) or, for
 stereo pairs, from the pipeline's depth measured by :mod:`s2r.quality` (sub-pixel RMS and fill rate per frame).
 
 Across frames: sigma_d against distance is a least-squares line (a constant when the boards span under
@@ -28,9 +28,9 @@ from s2r.quality.board import find_board
 from s2r.quality.metrics import FrameQuality
 from s2r.quality.run import DepthView
 from s2r.quality.summary import DEFAULT_BINS_M
-from s2r.sensor_fit.depth import DepthFrame, depth_frame, hole_scale_px
-from s2r.sensor_fit.images import BoardImage, image_blur_px, image_noise_dn
-from s2r.sensor_model import FillPoint, SensorModel
+from s2r.sensor.fit.depth import DepthFrame, depth_frame, hole_scale_px
+from s2r.sensor.fit.images import BoardImage, image_blur_px, image_noise_dn
+from s2r.sensor.model import FillPoint, SensorModel
 
 __all__ = ["MIN_SPAN_M", "SensorFit", "board_image", "fit_device_depth", "fit_images", "fit_model",
            "stereo_depth_frames"]
