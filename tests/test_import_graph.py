@@ -16,7 +16,7 @@ LAYERS: dict[str, int] = {
     "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1,  # none of these import each other
     "sensor.model": 1,  # the sensor model's type, carried by profiles
     "profile": 2, "targets": 2,
-    "rectification": 3, "imageio": 3,
+    "rectification": 3, "imageio": 3, "lens": 3,  # lens: camera and lens maths (projection, distortion, models)
     "formats": 4, "sources": 4,
     "recordings": 5,  # every input that yields stereo frames (files, bags, videos, RealSense recordings)
     "registry": 5, "htmlreport": 5, "sensor": 5,  # sensor: applies a sensor model (render uses it)
@@ -25,8 +25,8 @@ LAYERS: dict[str, int] = {
     "validate": 8, "sensor.fit": 8,  # sensor.fit: fits a sensor model on recordings (uses quality)
     "cli": 9, "__main__": 10, "__init__": 10,
 }
-CV2_HOMES = {"calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros", "validate",
-             "quality", "drift", "sensor", "recordings"}
+CV2_HOMES = {"lens", "calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros",
+             "validate", "quality", "drift", "sensor", "recordings"}
 PYBULLET_HOMES = {"render"}
 #: MuJoCo (an optional extra) is imported by one module only, lazily, when ``--renderer mujoco`` is asked for.
 MUJOCO_HOMES = {"render._mujoco"}

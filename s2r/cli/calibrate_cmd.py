@@ -16,7 +16,7 @@ from s2r.limits import MAX_SQUARE_M
 __all__ = ["register"]
 
 EXIT_OK = 0
-#: s2r.calib.solve.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+#: s2r.lens.models.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
 DEFAULT_LENS = "k1k2p1p2"
 
 

@@ -17,8 +17,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import RenderError
+from s2r.lens.distortion import project_points
 from s2r.profile import Camera, SimulationSettings, StereoProfile
-from s2r.render.distortion import project_points
 
 __all__ = ["BoardGeometry", "distance_range_m", "sample_board_poses"]
 

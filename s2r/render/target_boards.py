@@ -19,8 +19,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.lens.distortion import project_points
 from s2r.profile import StereoProfile
-from s2r.render.distortion import project_points
 from s2r.render.poses import BoardGeometry
 from s2r.render.textures import DARK, LIGHT, checkerboard_texture
 from s2r.targets import AnyTarget, AprilGridTarget, CharucoTarget, CheckerboardTarget

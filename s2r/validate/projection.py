@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.lens.distortion import project_points, undistort_pixels
 from s2r.profile import Camera, StereoProfile
-from s2r.render.distortion import project_points, undistort_pixels
 
 __all__ = ["ProjectionDiff", "projection_difference"]
 

@@ -107,8 +107,8 @@ def test_a_flat_frame_skips_the_plain_retry(monkeypatch: pytest.MonkeyPatch) -> 
 def _fold_tasks(seed: int, *, views: int, noise_px: float) -> list[FoldTask]:
     """The jackknife fold tasks (default lens model) of a calibration of an independent rig."""
     from s2r.calib.solve import heldout
-    from s2r.calib.solve.lens import lens_model
     from s2r.calib.solve.synth import board_object_points
+    from s2r.lens.models import lens_model
 
     rig = make_rig(seed, views=views, noise_px=noise_px, k3_max=0.0)
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
@@ -173,8 +173,8 @@ def test_warm_and_cold_solves_damp_little_and_reach_the_same_answer(monkeypatch:
     lands."""
     from s2r.calib.solve import heldout, joint
     from s2r.calib.solve.joint import solve_joint
-    from s2r.calib.solve.lens import lens_model
     from s2r.calib.solve.synth import board_object_points
+    from s2r.lens.models import lens_model
 
     rig = make_rig(34, views=16, noise_px=0.3, k3_max=0.0)
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,

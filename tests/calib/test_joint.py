@@ -11,10 +11,10 @@ import pytest
 from s2r.calib.detect import Detection
 from s2r.calib.solve.joint import JointInit, solve_joint
 from s2r.calib.solve.jointterms import Masks, State, all_residuals, normal_equations
-from s2r.calib.solve.lens import LENS_MODELS
 from s2r.calib.solve.observations import BoardObservation, StereoObservation, chessboard_observation
 from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
+from s2r.lens.models import LENS_MODELS
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 
 

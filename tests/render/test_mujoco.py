@@ -15,10 +15,10 @@ from scipy.spatial.transform import Rotation
 
 from s2r.cli import main
 from s2r.formats.s2r_yaml import load_profile_file
+from s2r.lens.distortion import project_points
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, SimulationSettings, StereoProfile
 from s2r.render import render_board_set, render_scene
 from s2r.render.backend import RendererChoice
-from s2r.render.distortion import project_points
 from s2r.targets import target_from_mapping
 from tests.render import mujoco_direct as md
 from tests.render._helpers import detect

@@ -22,9 +22,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, LensModel
 from s2r.calib.solve.observations import BoardObservation
 from s2r.errors import CalibrationError
+from s2r.lens.models import DEFAULT_LENS, LENS_MODELS, LensModel
 
 __all__ = [
     "DISTORTION_CHOICES",
@@ -42,7 +42,7 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 Points = NDArray[np.float32]
 
-#: ``--distortion`` choices (see :mod:`s2r.calib.solve.lens`): OpenCV flags and the number of coefficients kept.
+#: ``--distortion`` choices (see :mod:`s2r.lens.models`): OpenCV flags and the number of coefficients kept.
 DISTORTION_CHOICES: dict[str, tuple[int, int]] = {k: (m.cv_flags, m.n_coef) for k, m in LENS_MODELS.items()}
 #: Indices of the free distortion coefficients per choice.
 FREE_DISTORTION: dict[str, tuple[int, ...]] = {k: m.free for k, m in LENS_MODELS.items()}

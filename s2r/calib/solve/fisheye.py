@@ -26,8 +26,8 @@ from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
 from s2r.calib.solve.cvsolve import MonoSolution, StereoSolution
-from s2r.calib.solve.lens import LensModel
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel
 
 __all__ = ["FISHEYE", "EquidistantProjection", "FisheyeMono", "fisheye_baseline_covariance", "solve_mono_fisheye",
            "solve_stereo_fisheye"]
@@ -245,7 +245,7 @@ def _params_of(K: FloatArray, D: FloatArray) -> FloatArray:
 @dataclass(frozen=True)
 class EquidistantProjection:
     """OpenCV's fisheye (equidistant, k1..k4) camera through ``cv2.fisheye.projectPoints``, with the Jacobian
-    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); see :mod:`s2r.calib.solve.lens`."""
+    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); see :mod:`s2r.lens.models`."""
 
     name: str = "equidistant"
 

@@ -17,7 +17,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.joint import JointInit
-from s2r.calib.solve.lens import LENS_MODELS, LensModel
 from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.pair import PairSolution
@@ -30,6 +29,7 @@ from s2r.calib.solve.resample import (
     split_folds,
     trim_blunders,
 )
+from s2r.lens.models import LENS_MODELS, LensModel
 
 __all__ = ["BEND_SIGMAS", "MAX_BLUNDER_SHARE", "HeldoutFigures", "ParameterStd", "StereoHeldout", "bend_significant",
            "observations_heldout", "stereo_heldout"]

@@ -27,9 +27,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.jointterms import Blocks, JointInit, Masks, State, all_residuals, normal_equations, prepare
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel
 
 __all__ = ["START_DAMPING", "WARM_DAMPING", "JointInit", "JointSolution", "solve_joint"]
 

@@ -16,8 +16,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
+from s2r.lens.models import LensModel
 
 __all__ = ["Blocks", "CornerSet", "JointInit", "Masks", "State", "all_residuals", "camera_terms", "gather",
            "global_columns", "normal_equations", "prepare", "residuals", "rotations"]

@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.lens import LENS_MODELS
+from s2r.lens.models import LENS_MODELS
 
 __all__ = ["ModelComparison", "ModelScore", "compare_models", "judge_models"]
 

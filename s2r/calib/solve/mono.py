@@ -16,8 +16,6 @@ from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
-from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS
-from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.models import ModelComparison, compare_models
 from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
@@ -27,6 +25,8 @@ from s2r.calib.solve.stereo_figures import board_text, dropped_warning, repeat_w
 from s2r.calib.solve.verdict import Verdict, mono_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, merge_repeats, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file
+from s2r.lens.fold import fold_warnings
+from s2r.lens.models import DEFAULT_LENS, LENS_MODELS
 from s2r.profile import CalibrationQuality, DroppedView, MonoProfile, Provenance, SourceFile
 from s2r.progress import ProgressCallback
 

@@ -15,9 +15,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import MonoSolution
-from s2r.calib.solve.lens import LENS_MODELS
 from s2r.calib.solve.mono_resample import MonoHeldout
 from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
+from s2r.lens.models import LENS_MODELS
 
 __all__ = ["intrinsics_covariance", "mono_projection"]
 

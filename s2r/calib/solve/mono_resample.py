@@ -27,11 +27,11 @@ from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import MonoSolution
 from s2r.calib.solve.heldout import HeldoutFigures, ParameterStd
-from s2r.calib.solve.lens import LENS_MODELS
 from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
 from s2r.calib.solve.mono_fold import MonoFoldOutcome, MonoFoldTask, run_mono_fold
 from s2r.calib.solve.resample import FOLDS, split_folds
 from s2r.executor import local_pool
+from s2r.lens.models import LENS_MODELS
 
 __all__ = ["MONO_PARAMETERS", "MonoHeldout", "jackknife", "mono_heldout", "reported_std"]
 

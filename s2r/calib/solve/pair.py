@@ -23,10 +23,10 @@ from numpy.typing import NDArray
 from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
 from s2r.calib.solve.joint import START_DAMPING, WARM_DAMPING, JointInit, JointSolution, solve_joint
 from s2r.calib.solve.jointterms import Masks
-from s2r.calib.solve.lens import LensModel, lens_model
 from s2r.calib.solve.observations import StereoObservation, chessboard_observation
 from s2r.calib.solve.rig import RigInit, check_rig, initial_rig, pair_consistency
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel, lens_model
 
 __all__ = ["PairSolution", "solve_pair", "solve_pair_warped"]
 

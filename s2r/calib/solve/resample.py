@@ -35,9 +35,9 @@ from s2r.calib.detect.workers import worker_pool
 from s2r.calib.solve.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, JointInit, JointSolution, solve_joint
 from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations, prepare
 from s2r.calib.solve.jointterms import State as SolveState
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import StereoObservation
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel
 
 __all__ = ["BLUNDER_FLOOR_PX", "BLUNDER_SIGMAS", "FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std",
            "run_fold", "run_folds", "split_folds", "trim_blunders"]

@@ -23,9 +23,9 @@ from numpy.typing import NDArray
 
 from s2r.calib.solve.cvsolve import INIT_CRITERIA, MonoSolution, solve_mono_observations
 from s2r.calib.solve.joint import JointInit
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel
 
 __all__ = ["PairScore", "RigInit", "SwappedCamerasError", "check_rig", "initial_rig", "pair_consistency"]
 

@@ -20,8 +20,6 @@ from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect.pairs import PairDetection, display_name
 from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
-from s2r.calib.solve.lens import DEFAULT_LENS, LENS_MODELS, lens_model
-from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.models import ModelComparison
 from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
 from s2r.calib.solve.projection import ProjectionMap
@@ -45,6 +43,8 @@ from s2r.calib.solve.views import (
     too_few_error,
 )
 from s2r.errors import CalibrationError
+from s2r.lens.fold import fold_warnings
+from s2r.lens.models import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.profile import (
     CalibrationQuality,
     Camera,
@@ -346,7 +346,7 @@ def calibrate_stereo(
 
     Args:
         pattern: inner corners ``(cols, rows)``; square_m: square size in metres.
-        distortion: a :data:`s2r.calib.solve.lens.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
+        distortion: a :data:`s2r.lens.models.LENS_MODELS` choice; default ``k1k2p1p2`` (k3 fixed, as ROS).
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
         fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
         swap: exchange the left and right images (when the check finds the right camera to the left).

@@ -13,10 +13,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
-from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
+from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import SourceFile
 from s2r.progress import ProgressCallback
 from s2r.recordings.bagfiles import bag_storage_files

@@ -23,10 +23,10 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.sharpness import BLUR_RATIO, BlurFilter
-from s2r.calib.solve.lens import DEFAULT_LENS
 from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.calib.solve.views import REPEAT_PX, repeat_distance
 from s2r.errors import CalibrationError
+from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import DroppedView, SourceFile
 from s2r.progress import ProgressCallback
 from s2r.recordings import FrameSource

@@ -20,12 +20,12 @@ from dataclasses import replace
 import numpy as np
 
 from s2r.calib.solve.heldout import StereoHeldout, observations_heldout
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.targetcal import CORNER_OUTLIER_FACTOR, MonoFit, Observation
 from s2r.calib.solve.views import REPEAT_PX, repeat_distance, repeat_of
+from s2r.lens.models import LensModel
 from s2r.profile import DroppedView
 
 __all__ = ["merge_repeat_observations", "merge_repeat_pairs", "mono_fit_heldout", "pair_heldout"]

@@ -15,12 +15,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.solve.fisheye import FISHEYE
-from s2r.calib.solve.lens import LensModel, lens_model
 from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.pair import _joint as joint_pair_solution
 from s2r.calib.solve.rig import RigInit
 from s2r.calib.solve.targetcal import MonoFit, Observation, PairView
+from s2r.lens.models import LensModel, lens_model
 
 __all__ = ["joint_solve", "lens_model_of"]
 

@@ -16,8 +16,6 @@ from pathlib import Path
 
 from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
-from s2r.calib.solve.lens import DEFAULT_LENS
-from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.mono import MonoCalibration
 from s2r.calib.solve.mono_figures import mono_projection
 from s2r.calib.solve.stereo_figures import dropped_warning, repeat_warning
@@ -34,6 +32,8 @@ from s2r.calib.solve.targetcal import (
 )
 from s2r.calib.solve.verdict import mono_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
+from s2r.lens.fold import fold_warnings
+from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import MonoProfile, Provenance, SourceFile
 from s2r.progress import ProgressCallback
 from s2r.targets import AnyTarget, CheckerboardTarget

@@ -21,8 +21,6 @@ from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
 from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
 from s2r.calib.solve.heldout import StereoHeldout
-from s2r.calib.solve.lens import DEFAULT_LENS
-from s2r.calib.solve.lensfold import fold_warnings
 from s2r.calib.solve.observations import StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
@@ -48,6 +46,8 @@ from s2r.calib.solve.targetcal import (
 from s2r.calib.solve.verdict import stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
+from s2r.lens.fold import fold_warnings
+from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import DroppedView, Extrinsics, Provenance, SourceFile, StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import stereo_rectification

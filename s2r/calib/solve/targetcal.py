@@ -33,9 +33,9 @@ from s2r.calib.solve.cvsolve import (
     solve_stereo,
 )
 from s2r.calib.solve.fisheye import FisheyeMono, fisheye_baseline_covariance, solve_mono_fisheye, solve_stereo_fisheye
-from s2r.calib.solve.lens import LensModel
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, match_corner_order, too_few_error
 from s2r.errors import CalibrationError
+from s2r.lens.models import LensModel
 from s2r.profile import CalibrationQuality, Camera, CameraUncertainty, Distortion, DroppedView, SourceFile
 from s2r.targets import AnyTarget, CharucoTarget, CheckerboardTarget
 

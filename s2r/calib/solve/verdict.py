@@ -14,7 +14,7 @@ board footprint (coverage)    >= 50 %   >= 20 %    below 20 %: poor
 
 A better lens model on held-out views, unobservable parameters, dropped mismatched pairs and a joint solve
 that stopped at its step limit still improving make it at least "check"; a lens model that cannot serve its
-whole image (it folds over or overstretches inside it: :mod:`s2r.calib.solve.lensfold`) makes it "poor". The
+whole image (it folds over or overstretches inside it: :mod:`s2r.lens.fold`) makes it "poor". The
 verdict is the worst level. One camera (``--mono``): the same RMS, held-out and coverage limits, and the
 focal length's std relative to the focal length instead of the baseline's (good <= 0.5 %, check <= 2 %).
 """
@@ -70,7 +70,7 @@ def stereo_verdict(*, rms_px: float, heldout_px: float | None, epipolar_px: floa
     """Judge a stereo calibration from its figures (see the module table); ``heldout_over_all``: the held-out
     error is over every corner (more were left out than detector blunders explain); ``converged`` False: the
     joint solve stopped at its step limit still improving; ``lens_folds``: a camera's lens model folds over
-    inside its image (:func:`s2r.calib.solve.lensfold.fold_warnings`), poor whatever the other figures say."""
+    inside its image (:func:`s2r.lens.fold.fold_warnings`), poor whatever the other figures say."""
     what = "stereo: pairs left out of the fit, one board pose per pair fitted to both cameras" + (
         "; over all corners: more than detector blunders fell beyond the blunder threshold" if heldout_over_all
         else "")
