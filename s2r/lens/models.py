@@ -27,7 +27,8 @@ from numpy.typing import NDArray
 
 from s2r.errors import CalibrationError
 
-__all__ = ["DEFAULT_LENS", "LENS_MODELS", "PINHOLE", "LensModel", "PinholeProjection", "Projection", "lens_model"]
+__all__ = ["DEFAULT_LENS", "FISHEYE", "LENS_MODELS", "PINHOLE", "EquidistantProjection", "LensModel",
+           "PinholeProjection", "Projection", "lens_model"]
 
 FloatArray = NDArray[np.float64]
 
@@ -103,3 +104,26 @@ def lens_model(name: str) -> LensModel:
         raise CalibrationError(f"unknown distortion model {name!r}", field="--distortion",
                                hint=f"choose one of {', '.join(LENS_MODELS)}")
     return LENS_MODELS[name]
+
+
+@dataclass(frozen=True)
+class EquidistantProjection:
+    """OpenCV's fisheye (equidistant, k1..k4) camera through ``cv2.fisheye.projectPoints``, with the Jacobian
+    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); as :class:`PinholeProjection`."""
+
+    name: str = "equidistant"
+
+    def project(self, obj: FloatArray, rvec: FloatArray, tvec: FloatArray, K: FloatArray,
+                D: FloatArray) -> tuple[FloatArray, FloatArray]:
+        pts, jac = cv2.fisheye.projectPoints(np.ascontiguousarray(obj, np.float64).reshape(-1, 1, 3),
+                                             np.asarray(rvec, np.float64).reshape(3, 1),
+                                             np.asarray(tvec, np.float64).reshape(3, 1), K,
+                                             np.asarray(D, np.float64).reshape(4, 1))
+        return np.asarray(pts, np.float64).reshape(-1, 2), np.asarray(jac, np.float64)[:, list(_JOINT_COLUMNS)]
+
+
+#: cv2.fisheye.projectPoints' Jacobian columns (f 2, c 2, k 4, rvec 3, tvec 3, alpha) in the joint order.
+_JOINT_COLUMNS = (8, 9, 10, 11, 12, 13, 0, 1, 2, 3, 4, 5, 6, 7)
+#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.solve.joint.solve_joint` (all four k free).
+FISHEYE = LensModel("equidistant", EquidistantProjection(), 4, (0, 1, 2, 3), 0, "equidistant",
+                    ("k1", "k2", "k3", "k4"))

@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import SourceError
+from s2r.lens.distortion import distort_normalised
 from s2r.names import NAME_HINT, is_safe_name
 from s2r.profile import Camera, StereoProfile
 from s2r.sources.description import FloatArray
@@ -51,34 +52,13 @@ def _vec(values: FloatArray | list[float] | tuple[float, ...]) -> str:
     return " ".join(_num(v) for v in values)
 
 
-def _distort(cam: Camera, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """OpenCV's lens model applied to normalised pinhole coordinates (plumb_bob, rational_polynomial,
-    equidistant), numpy only."""
-    c = np.asarray(cam.distortion.coefficients, np.float64)
-    if cam.distortion.model == "equidistant":
-        r = np.hypot(x, y)
-        theta = np.arctan(r)
-        t2 = theta * theta
-        theta_d = theta * (1 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * c[3]))))
-        scale = np.where(r > 1e-12, theta_d / np.where(r > 1e-12, r, 1.0), 1.0)
-        return x * scale, y * scale
-    k = np.zeros(8)
-    k[: len(c)] = c
-    k1, k2, p1, p2, k3, k4, k5, k6 = k
-    r2 = x * x + y * y
-    radial = (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)))
-    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-    return xd, yd
-
-
 def distortion_residual_px(cam: Camera, *, steps: int = 64) -> tuple[float, float]:
     """(worst, 95th percentile) pixel distance, over a ``steps`` x ``steps`` grid spanning the image, between
     where the camera's lens (and skew) images a ray and where the same camera without them does."""
     u, v = np.meshgrid(np.linspace(0.0, cam.width_px - 1.0, steps), np.linspace(0.0, cam.height_px - 1.0, steps))
     y = (v - cam.cy_px) / cam.fy_px
     x = (u - cam.cx_px) / cam.fx_px
-    xd, yd = _distort(cam, x, y)
+    xd, yd = distort_normalised(cam, x, y)
     ud = cam.fx_px * xd + cam.skew * yd + cam.cx_px
     vd = cam.fy_px * yd + cam.cy_px
     err = np.hypot(ud - u, vd - v)

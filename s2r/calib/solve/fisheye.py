@@ -27,10 +27,8 @@ from scipy.sparse import lil_matrix
 
 from s2r.calib.solve.cvsolve import MonoSolution, StereoSolution
 from s2r.errors import CalibrationError
-from s2r.lens.models import LensModel
 
-__all__ = ["FISHEYE", "EquidistantProjection", "FisheyeMono", "fisheye_baseline_covariance", "solve_mono_fisheye",
-           "solve_stereo_fisheye"]
+__all__ = ["FisheyeMono", "fisheye_baseline_covariance", "solve_mono_fisheye", "solve_stereo_fisheye"]
 
 FloatArray = NDArray[np.float64]
 Points = NDArray[np.float32]
@@ -240,26 +238,3 @@ def fisheye_baseline_covariance(obj: Sequence[Points], img_l: Sequence[Points], 
 
 def _params_of(K: FloatArray, D: FloatArray) -> FloatArray:
     return np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.asarray(D).reshape(-1)[:4]])
-
-
-@dataclass(frozen=True)
-class EquidistantProjection:
-    """OpenCV's fisheye (equidistant, k1..k4) camera through ``cv2.fisheye.projectPoints``, with the Jacobian
-    in the joint solve's column order (rvec, tvec, fx, fy, cx, cy, k1..k4); see :mod:`s2r.lens.models`."""
-
-    name: str = "equidistant"
-
-    def project(self, obj: FloatArray, rvec: FloatArray, tvec: FloatArray, K: FloatArray,
-                D: FloatArray) -> tuple[FloatArray, FloatArray]:
-        pts, jac = cv2.fisheye.projectPoints(np.ascontiguousarray(obj, np.float64).reshape(-1, 1, 3),
-                                             np.asarray(rvec, np.float64).reshape(3, 1),
-                                             np.asarray(tvec, np.float64).reshape(3, 1), K,
-                                             np.asarray(D, np.float64).reshape(4, 1))
-        return np.asarray(pts, np.float64).reshape(-1, 2), np.asarray(jac, np.float64)[:, list(_JOINT_COLUMNS)]
-
-
-#: cv2.fisheye.projectPoints' Jacobian columns (f 2, c 2, k 4, rvec 3, tvec 3, alpha) in the joint order.
-_JOINT_COLUMNS = (8, 9, 10, 11, 12, 13, 0, 1, 2, 3, 4, 5, 6, 7)
-#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.solve.joint.solve_joint` (all four k free).
-FISHEYE = LensModel("equidistant", EquidistantProjection(), 4, (0, 1, 2, 3), 0, "equidistant",
-                    ("k1", "k2", "k3", "k4"))

@@ -2,7 +2,7 @@
 
 Started from the per-camera fits of :mod:`s2r.calib.solve.target_stereo`; the solve itself is issue 11's joint solver
 (:mod:`s2r.calib.solve.joint` through ``solve.pair._joint``, which has no public name yet), run with the pinhole
-lens models or the equidistant :data:`s2r.calib.solve.fisheye.FISHEYE`.
+lens models or the equidistant :data:`s2r.lens.models.FISHEYE`.
 """
 
 from __future__ import annotations
@@ -14,13 +14,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.fisheye import FISHEYE
 from s2r.calib.solve.observations import BoardObservation, StereoObservation
 from s2r.calib.solve.pair import PairSolution
 from s2r.calib.solve.pair import _joint as joint_pair_solution
 from s2r.calib.solve.rig import RigInit
 from s2r.calib.solve.targetcal import MonoFit, Observation, PairView
-from s2r.lens.models import LensModel, lens_model
+from s2r.lens.models import FISHEYE, LensModel, lens_model
 
 __all__ = ["joint_solve", "lens_model_of"]
 
