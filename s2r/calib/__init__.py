@@ -18,9 +18,9 @@ if TYPE_CHECKING:
     from s2r.calib.detect import CornerCache, Detection, detect_board
     from s2r.calib.detect.coverage import Coverage, PoseSpread
     from s2r.calib.detect.inputs import PairSet, find_mono_images, find_stereo_pairs
-    from s2r.calib.solve.mono import MonoCalibration, calibrate_mono
-    from s2r.calib.solve.stereo import StereoCalibration, ViewError, calibrate_stereo
-    from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+    from s2r.calib.solve.pipelines.mono import MonoCalibration, calibrate_mono
+    from s2r.calib.solve.pipelines.stereo import StereoCalibration, ViewError, calibrate_stereo
+    from s2r.calib.solve.pipelines.stereo_bag import calibrate_stereo_bag
     from s2r.calib.solve.views import MAX_SOLVE_VIEWS, MIN_VIEWS, match_corner_order
 
 #: Public name -> the module that defines it.
@@ -29,9 +29,10 @@ _HOMES = {
     "Coverage": "s2r.calib.detect.coverage", "PoseSpread": "s2r.calib.detect.coverage",
     "PairSet": "s2r.calib.detect.inputs", "find_mono_images": "s2r.calib.detect.inputs",
     "find_stereo_pairs": "s2r.calib.detect.inputs",
-    "MonoCalibration": "s2r.calib.solve.mono", "calibrate_mono": "s2r.calib.solve.mono",
-    "StereoCalibration": "s2r.calib.solve.stereo", "ViewError": "s2r.calib.solve.stereo",
-    "calibrate_stereo": "s2r.calib.solve.stereo", "calibrate_stereo_bag": "s2r.calib.solve.stereo_bag",
+    "MonoCalibration": "s2r.calib.solve.pipelines.mono", "calibrate_mono": "s2r.calib.solve.pipelines.mono",
+    "StereoCalibration": "s2r.calib.solve.pipelines.stereo", "ViewError": "s2r.calib.solve.pipelines.stereo",
+    "calibrate_stereo": "s2r.calib.solve.pipelines.stereo",
+    "calibrate_stereo_bag": "s2r.calib.solve.pipelines.stereo_bag",
     "MAX_SOLVE_VIEWS": "s2r.calib.solve.views", "MIN_VIEWS": "s2r.calib.solve.views",
     "match_corner_order": "s2r.calib.solve.views",
 }

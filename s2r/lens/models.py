@@ -5,7 +5,7 @@ board frame in the camera's optical frame) and the intrinsics ``K`` (3x3 px) and
 to pixels, with the Jacobian in one fixed column order: ``rvec (3), tvec (3), fx, fy, cx, cy, D[0..n)``.
 :data:`PINHOLE` is OpenCV's pinhole model (``cv2.projectPoints``: plumb_bob and rational distortion);
 other models (e.g. an equidistant fisheye through ``cv2.fisheye.projectPoints``) implement the same
-protocol and plug into :mod:`s2r.calib.solve.joint` unchanged.
+protocol and plug into :mod:`s2r.calib.solve.solvers.joint` unchanged.
 
 :data:`LENS_MODELS` maps each ``--distortion`` choice to its projection, its coefficient count (all
 stored, fixed ones at 0) and the indices of the coefficients the solve estimates:
@@ -124,6 +124,6 @@ class EquidistantProjection:
 
 #: cv2.fisheye.projectPoints' Jacobian columns (f 2, c 2, k 4, rvec 3, tvec 3, alpha) in the joint order.
 _JOINT_COLUMNS = (8, 9, 10, 11, 12, 13, 0, 1, 2, 3, 4, 5, 6, 7)
-#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.solve.joint.solve_joint` (all four k free).
+#: The fisheye lens model of ``--lens fisheye`` for :func:`s2r.calib.solve.solvers.joint.solve_joint` (all four k free).
 FISHEYE = LensModel("equidistant", EquidistantProjection(), 4, (0, 1, 2, 3), 0, "equidistant",
                     ("k1", "k2", "k3", "k4"))

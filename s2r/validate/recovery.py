@@ -140,7 +140,7 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         calib_log.setLevel(logging.ERROR)  # coverage advice is kept in the result, not shown as warnings
         try:
             if profile.left.distortion.model == "equidistant":  # a fisheye lens: OpenCV's equidistant model
-                from s2r.calib.solve.target_stereo import calibrate_stereo_target
+                from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target
                 from s2r.targets import CheckerboardTarget
 
                 board = CheckerboardTarget(target_type="checkerboard", targetCols=9, targetRows=6,

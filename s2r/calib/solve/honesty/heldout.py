@@ -1,6 +1,6 @@
 """The honest figures of a stereo calibration: stereo held-out error, both standard deviations, model check.
 
-Built on the fold solves of :mod:`s2r.calib.solve.resample` (K interleaved folds over the used pairs). Every
+Built on the fold solves of :mod:`s2r.calib.solve.honesty.resample` (K interleaved folds over the used pairs). Every
 parameter of ``PARAMETERS`` gets two standard deviations: the residual-scaled covariance of the full solve and
 the jackknife over the folds. The larger is reported (and written to the profile), and the figures say which
 it is: on real sets the jackknife is often 2-5x the covariance (board shape, lens model), while on a clean
@@ -16,11 +16,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.joint import JointInit
-from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
-from s2r.calib.solve.observations import StereoObservation, chessboard_observation
-from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.resample import (
+from s2r.calib.solve.honesty.models import ModelComparison, ModelScore, judge_models
+from s2r.calib.solve.honesty.resample import (
     PARAMETERS,
     FoldOutcome,
     FoldTask,
@@ -29,6 +26,9 @@ from s2r.calib.solve.resample import (
     split_folds,
     trim_blunders,
 )
+from s2r.calib.solve.solvers.joint import JointInit
+from s2r.calib.solve.solvers.observations import StereoObservation, chessboard_observation
+from s2r.calib.solve.solvers.pair import PairSolution
 from s2r.lens.models import LENS_MODELS, LensModel
 
 __all__ = ["BEND_SIGMAS", "MAX_BLUNDER_SHARE", "HeldoutFigures", "ParameterStd", "StereoHeldout", "bend_significant",
@@ -109,7 +109,7 @@ class HeldoutFigures:
 @dataclass(frozen=True)
 class StereoHeldout(HeldoutFigures):
     """The stereo held-out error (:class:`HeldoutFigures`; corners left out as detector blunders, see
-    :func:`s2r.calib.solve.resample.trim_blunders`; parameters ``PARAMETERS``) and per camera the folds'
+    :func:`s2r.calib.solve.honesty.resample.trim_blunders`; parameters ``PARAMETERS``) and per camera the folds'
     intrinsics (K, D) (for the projection uncertainty)."""
 
     fold_intrinsics: tuple[tuple[tuple[FloatArray, FloatArray], ...], ...] = ()

@@ -26,8 +26,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.jointterms import Blocks, JointInit, Masks, State, all_residuals, normal_equations, prepare
-from s2r.calib.solve.observations import StereoObservation
+from s2r.calib.solve.solvers.jointterms import Blocks, JointInit, Masks, State, all_residuals, normal_equations, prepare
+from s2r.calib.solve.solvers.observations import StereoObservation
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel
 

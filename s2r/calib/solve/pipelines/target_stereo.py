@@ -19,15 +19,16 @@ import numpy as np
 
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
-from s2r.calib.solve.cvsolve import StereoSolution, outlier_threshold
-from s2r.calib.solve.heldout import StereoHeldout
-from s2r.calib.solve.observations import StereoObservation
-from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.stereo import StereoCalibration, ViewError, _uncertainty_warnings
-from s2r.calib.solve.stereo_figures import fit_warnings, repeat_warning, with_reported_std
-from s2r.calib.solve.target_honest import merge_repeat_pairs, pair_heldout
-from s2r.calib.solve.target_joint import joint_solve, lens_model_of
-from s2r.calib.solve.targetcal import (
+from s2r.calib.solve.honesty.heldout import StereoHeldout
+from s2r.calib.solve.honesty.target import merge_repeat_pairs, pair_heldout
+from s2r.calib.solve.honesty.verdict import stereo_verdict
+from s2r.calib.solve.pipelines.stereo import StereoCalibration, ViewError, _uncertainty_warnings
+from s2r.calib.solve.pipelines.stereo_figures import fit_warnings, repeat_warning, with_reported_std
+from s2r.calib.solve.pipelines.target_joint import joint_solve, lens_model_of
+from s2r.calib.solve.solvers.cvsolve import StereoSolution, outlier_threshold
+from s2r.calib.solve.solvers.observations import StereoObservation
+from s2r.calib.solve.solvers.pair import PairSolution
+from s2r.calib.solve.solvers.targetcal import (
     CameraViews,
     MonoFit,
     Observation,
@@ -43,7 +44,6 @@ from s2r.calib.solve.targetcal import (
     solve_pair,
     to_camera,
 )
-from s2r.calib.solve.verdict import stereo_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.fileio import sha256_file
 from s2r.lens.fold import fold_warnings

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
-from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.pipelines.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
 from s2r.lens.models import DEFAULT_LENS
@@ -48,7 +48,8 @@ def calibrate_stereo_bag(
     target: AnyTarget | None = None, lens: str = "pinhole",
 ) -> StereoCalibration:
     """Calibrate a stereo pair from the image topics of a ROS bag; see :func:`s2r.calib.calibrate_stereo`
-    (with ``target``: corner ids and partial views through ``lens``, see :mod:`s2r.calib.solve.target_stereo`).
+    (with ``target``: corner ids and partial views through ``lens``, see
+    :mod:`s2r.calib.solve.pipelines.target_stereo`).
 
     Raises:
         CalibrationError: bag unreadable, a topic missing (the message lists the bag's image topics),
@@ -81,7 +82,7 @@ def calibrate_stereo_bag(
                                path=bag, field="--max-dt", hint="raise --max-dt or check the topics")
     pairs = [(n, dets[2 * i], dets[2 * i + 1]) for i, n in enumerate(names)]
     if target is not None:
-        from s2r.calib.solve.target_stereo import calibrate_stereo_target_detections
+        from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target_detections
 
         result = calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,

@@ -21,9 +21,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.cvsolve import INIT_CRITERIA, MonoSolution, solve_mono_observations
-from s2r.calib.solve.joint import JointInit
-from s2r.calib.solve.observations import BoardObservation, StereoObservation
+from s2r.calib.solve.solvers.cvsolve import INIT_CRITERIA, MonoSolution, solve_mono_observations
+from s2r.calib.solve.solvers.joint import JointInit
+from s2r.calib.solve.solvers.observations import BoardObservation, StereoObservation
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel
 

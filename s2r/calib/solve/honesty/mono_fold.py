@@ -1,4 +1,4 @@
-"""One fold of the single-camera resampling (:mod:`s2r.calib.solve.mono_resample`): a worker function.
+"""One fold of the single-camera resampling (:mod:`s2r.calib.solve.honesty.mono_resample`): a worker function.
 
 Training: the fold's views solved from the full solution's intrinsics (warm start, loose stopping rule;
 pinhole: ``cv2.calibrateCameraExtended`` with CALIB_USE_INTRINSIC_GUESS, fisheye: ``cv2.fisheye.calibrate``
@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.cvsolve import DISTORTION_CHOICES, INIT_CRITERIA, outlier_threshold
+from s2r.calib.solve.solvers.cvsolve import DISTORTION_CHOICES, INIT_CRITERIA, outlier_threshold
 
 __all__ = ["MonoFoldOutcome", "MonoFoldTask", "run_mono_fold"]
 
@@ -81,7 +81,7 @@ def _calibrate(obj: Sequence[Points], img: Sequence[Points], task: MonoFoldTask,
     """K, D and each view's corner errors (px) of one training solve, warm-started from ``start`` when given."""
     if task.lens == "fisheye":
         if start is None:
-            from s2r.calib.solve.fisheye import solve_mono_fisheye  # scipy: loaded only for a fisheye lens
+            from s2r.calib.solve.solvers.fisheye import solve_mono_fisheye  # scipy: loaded only for a fisheye lens
 
             sol = solve_mono_fisheye(obj, img, task.size).solution
             K, D, rvecs, tvecs = sol.K, sol.D, list(sol.rvecs), list(sol.tvecs)

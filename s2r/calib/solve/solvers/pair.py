@@ -1,13 +1,13 @@
 """Solve a stereo pair from matched chessboard views: checks, then one joint solve (default) or ROS's way.
 
-Default: each camera alone with OpenCV (:func:`s2r.calib.solve.rig.initial_rig`), the checks of
-:mod:`s2r.calib.solve.rig` (identical images, mismatched pairs, ``--square`` unit, swapped cameras), then
-:func:`s2r.calib.solve.joint.solve_joint` refining both cameras, the extrinsics and every board pose together
+Default: each camera alone with OpenCV (:func:`s2r.calib.solve.solvers.rig.initial_rig`), the checks of
+:mod:`s2r.calib.solve.solvers.rig` (identical images, mismatched pairs, ``--square`` unit, swapped cameras), then
+:func:`s2r.calib.solve.solvers.joint.solve_joint` refining both cameras, the extrinsics and every board pose together
 with outliers rejected inside the loop; every standard deviation comes from that solve's covariance.
 
 ``fix_intrinsics`` (ROS camera_calibration's way): intrinsics from the mono solves, held fixed in
 ``cv2.stereoCalibrate``; the baseline std then adds the intrinsics' uncertainty propagated through the
-extrinsics (:func:`s2r.calib.solve.cvsolve.extrinsics_covariance`).
+extrinsics (:func:`s2r.calib.solve.solvers.cvsolve.extrinsics_covariance`).
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
-from s2r.calib.solve.joint import START_DAMPING, WARM_DAMPING, JointInit, JointSolution, solve_joint
-from s2r.calib.solve.jointterms import Masks
-from s2r.calib.solve.observations import StereoObservation, chessboard_observation
-from s2r.calib.solve.rig import RigInit, check_rig, initial_rig, pair_consistency
+from s2r.calib.solve.solvers.cvsolve import extrinsics_covariance, outlier_threshold, solve_mono, solve_stereo
+from s2r.calib.solve.solvers.joint import START_DAMPING, WARM_DAMPING, JointInit, JointSolution, solve_joint
+from s2r.calib.solve.solvers.jointterms import Masks
+from s2r.calib.solve.solvers.observations import StereoObservation, chessboard_observation
+from s2r.calib.solve.solvers.rig import RigInit, check_rig, initial_rig, pair_consistency
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel, lens_model
 

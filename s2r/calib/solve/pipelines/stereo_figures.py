@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from s2r.calib.solve.heldout import BEND_SIGMAS, StereoHeldout
-from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
-from s2r.calib.solve.verdict import NOT_CONVERGED
+from s2r.calib.solve.honesty.heldout import BEND_SIGMAS, StereoHeldout
+from s2r.calib.solve.honesty.projection import ProjectionMap, covariance_projection_map, projection_map
+from s2r.calib.solve.honesty.verdict import NOT_CONVERGED
+from s2r.calib.solve.solvers.pair import PairSolution
 from s2r.calib.solve.views import REPEAT_PX, StereoViews, merge_repeats
 from s2r.profile import DroppedView
 

@@ -19,11 +19,11 @@ from s2r.calib.detect import Detection
 from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect.pairs import PairDetection, display_name
-from s2r.calib.solve.heldout import StereoHeldout, stereo_heldout
-from s2r.calib.solve.models import ModelComparison
-from s2r.calib.solve.pair import PairSolution, solve_pair, solve_pair_warped
-from s2r.calib.solve.projection import ProjectionMap
-from s2r.calib.solve.stereo_figures import (
+from s2r.calib.solve.honesty.heldout import StereoHeldout, stereo_heldout
+from s2r.calib.solve.honesty.models import ModelComparison
+from s2r.calib.solve.honesty.projection import ProjectionMap
+from s2r.calib.solve.honesty.verdict import Verdict, stereo_verdict
+from s2r.calib.solve.pipelines.stereo_figures import (
     board_text,
     choose_warp,
     dropped_warning,
@@ -33,7 +33,7 @@ from s2r.calib.solve.stereo_figures import (
     repeat_warning,
     with_reported_std,
 )
-from s2r.calib.solve.verdict import Verdict, stereo_verdict
+from s2r.calib.solve.solvers.pair import PairSolution, solve_pair, solve_pair_warped
 from s2r.calib.solve.views import (
     MIN_VIEWS,
     check_sizes,
@@ -88,7 +88,7 @@ class StereoCalibration:
     y differences of matching corners after rectification; ``corners_left/right`` the used views' corners;
     ``sample_paths`` (files) or ``sample_images`` (bags, grey) one used pair, for the report; ``frames`` (stream
     inputs: videos) the frames read, used as views and not kept by reason
-    (:func:`s2r.calib.solve.stereo_stream.frame_counts`).
+    (:func:`s2r.calib.solve.pipelines.stereo_stream.frame_counts`).
     """
 
     profile: StereoProfile
@@ -350,7 +350,7 @@ def calibrate_stereo(
         max_error_px: fixed per-view RMS outlier threshold; default a robust (median/MAD) one.
         fix_intrinsics: ROS's way (intrinsics from each camera alone, held fixed) instead of the joint solve.
         swap: exchange the left and right images (when the check finds the right camera to the left).
-        compare: score every lens model on held-out views (:func:`s2r.calib.solve.models.compare_models`).
+        compare: score every lens model on held-out views (:func:`s2r.calib.solve.honesty.models.compare_models`).
         jobs: detection processes (default all cores); cache_dir: per-image corner cache folder.
         names: pair labels (default the left file stems); unpaired: files without a partner (listed as dropped).
 

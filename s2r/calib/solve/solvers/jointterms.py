@@ -1,4 +1,4 @@
-"""The residuals and Jacobians of the joint stereo solve (:mod:`s2r.calib.solve.joint`), over every corner of
+"""The residuals and Jacobians of the joint stereo solve (:mod:`s2r.calib.solve.solvers.joint`), over every corner of
 every view at once: the solve's mutable parameters (:class:`State`), the corners gathered per camera, and the
 normal equations with each view's pose block kept apart for the Schur complement.
 
@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.observations import StereoObservation
+from s2r.calib.solve.solvers.observations import StereoObservation
 from s2r.lens.models import LensModel
 
 __all__ = ["Blocks", "CornerSet", "JointInit", "Masks", "State", "all_residuals", "camera_terms", "gather",

@@ -2,7 +2,7 @@
 
 The covariance of (fx, fy, cx, cy, free distortion terms) is first-order, ``sigma^2 (J^T J)^-1`` with each
 view's board pose eliminated (Schur complement) and ``sigma^2`` the residual variance, from
-``cv2.projectPoints``' Jacobian at the solution. The maps themselves are :func:`s2r.calib.solve.projection.
+``cv2.projectPoints``' Jacobian at the solution. The maps themselves are :func:`s2r.calib.solve.honesty.projection.
 projection_map`'s (pixels, worst direction, at 1 m).
 """
 
@@ -14,9 +14,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.cvsolve import MonoSolution
-from s2r.calib.solve.mono_resample import MonoHeldout
-from s2r.calib.solve.projection import ProjectionMap, covariance_projection_map, projection_map
+from s2r.calib.solve.honesty.mono_resample import MonoHeldout
+from s2r.calib.solve.honesty.projection import ProjectionMap, covariance_projection_map, projection_map
+from s2r.calib.solve.solvers.cvsolve import MonoSolution
 from s2r.lens.models import LENS_MODELS
 
 __all__ = ["intrinsics_covariance", "mono_projection"]

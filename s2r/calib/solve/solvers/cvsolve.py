@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.observations import BoardObservation
+from s2r.calib.solve.solvers.observations import BoardObservation
 from s2r.errors import CalibrationError
 from s2r.lens.models import DEFAULT_LENS, LENS_MODELS, LensModel
 

@@ -15,14 +15,14 @@ from numpy.typing import NDArray
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.chessboard import board_object_points
 from s2r.calib.detect.coverage import Coverage, PoseSpread, coverage_of, coverage_warnings, pose_spread
-from s2r.calib.solve.cvsolve import MonoSolution, outlier_threshold, solve_mono
-from s2r.calib.solve.models import ModelComparison, compare_models
-from s2r.calib.solve.mono_figures import mono_projection
-from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
-from s2r.calib.solve.projection import ProjectionMap
-from s2r.calib.solve.stereo import make_camera
-from s2r.calib.solve.stereo_figures import board_text, dropped_warning, repeat_warning
-from s2r.calib.solve.verdict import Verdict, mono_verdict
+from s2r.calib.solve.honesty.models import ModelComparison, compare_models
+from s2r.calib.solve.honesty.mono_resample import MonoHeldout, mono_heldout, reported_std
+from s2r.calib.solve.honesty.projection import ProjectionMap
+from s2r.calib.solve.honesty.verdict import Verdict, mono_verdict
+from s2r.calib.solve.pipelines.mono_figures import mono_projection
+from s2r.calib.solve.pipelines.stereo import make_camera
+from s2r.calib.solve.pipelines.stereo_figures import board_text, dropped_warning, repeat_warning
+from s2r.calib.solve.solvers.cvsolve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, merge_repeats, no_board_error, select_diverse, too_few_error
 from s2r.fileio import sha256_file
 from s2r.lens.fold import fold_warnings

@@ -1,7 +1,8 @@
 """The joint solve of a target calibration: both cameras, extrinsics and board poses on corners matched by id.
 
-Started from the per-camera fits of :mod:`s2r.calib.solve.target_stereo`; the solve itself is issue 11's joint solver
-(:mod:`s2r.calib.solve.joint` through ``solve.pair._joint``, which has no public name yet), run with the pinhole
+Started from the per-camera fits of :mod:`s2r.calib.solve.pipelines.target_stereo`; the solve itself is issue 11's
+joint solver
+(:mod:`s2r.calib.solve.solvers.joint` through ``solve.pair._joint``, which has no public name yet), run with the pinhole
 lens models or the equidistant :data:`s2r.lens.models.FISHEYE`.
 """
 
@@ -14,11 +15,11 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.observations import BoardObservation, StereoObservation
-from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.pair import _joint as joint_pair_solution
-from s2r.calib.solve.rig import RigInit
-from s2r.calib.solve.targetcal import MonoFit, Observation, PairView
+from s2r.calib.solve.solvers.observations import BoardObservation, StereoObservation
+from s2r.calib.solve.solvers.pair import PairSolution
+from s2r.calib.solve.solvers.pair import _joint as joint_pair_solution
+from s2r.calib.solve.solvers.rig import RigInit
+from s2r.calib.solve.solvers.targetcal import MonoFit, Observation, PairView
 from s2r.lens.models import FISHEYE, LensModel, lens_model
 
 __all__ = ["joint_solve", "lens_model_of"]
@@ -37,7 +38,8 @@ def joint_solve(names: Sequence[str], obs_l: list[Observation | None], obs_r: li
                  keeps: list[dict[int, int]], fit_l: MonoFit, fit_r: MonoFit, views: Sequence[PairView], *,
                  lens: str, distortion: str, max_error_px: float | None
                  ) -> tuple[list[StereoObservation], PairSolution]:
-    """The joint solve (:mod:`s2r.calib.solve.joint`) of every view either camera kept, started from the mono fits:
+    """The joint solve (:mod:`s2r.calib.solve.solvers.joint`) of every view either camera kept, started from the mono
+    fits:
     R, T the consensus of the views both saw, each view's board pose from the left fit (or from the right
     fit moved into the left camera)."""
     R, T = _consensus([(fit_l.solution.rvecs[v.idx_l], fit_l.solution.tvecs[v.idx_l], fit_r.solution.rvecs[v.idx_r],

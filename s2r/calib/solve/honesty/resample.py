@@ -1,7 +1,7 @@
 """Resampling over pairs: the stereo held-out error and jackknife standard deviations (model error included).
 
 The used pairs are split into ``K`` interleaved folds (pair i in fold ``i mod K``). For each fold the joint
-solve (:func:`s2r.calib.solve.joint.solve_joint`, same outlier rules: corners beyond 5 robust sigmas, at least
+solve (:func:`s2r.calib.solve.solvers.joint.solve_joint`, same outlier rules: corners beyond 5 robust sigmas, at least
 0.3 px, and views beyond the robust view threshold) runs on the other pairs, started from the full solution
 (warm start; converged, as the jackknife reads its parameters). Then:
 
@@ -32,10 +32,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect.workers import worker_pool
-from s2r.calib.solve.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, JointInit, JointSolution, solve_joint
-from s2r.calib.solve.jointterms import Masks, all_residuals, normal_equations, prepare
-from s2r.calib.solve.jointterms import State as SolveState
-from s2r.calib.solve.observations import StereoObservation
+from s2r.calib.solve.solvers.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, JointInit, JointSolution, solve_joint
+from s2r.calib.solve.solvers.jointterms import Masks, all_residuals, normal_equations, prepare
+from s2r.calib.solve.solvers.jointterms import State as SolveState
+from s2r.calib.solve.solvers.observations import StereoObservation
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel
 

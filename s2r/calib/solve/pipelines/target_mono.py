@@ -16,12 +16,13 @@ from pathlib import Path
 
 from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
-from s2r.calib.solve.mono import MonoCalibration
-from s2r.calib.solve.mono_figures import mono_projection
-from s2r.calib.solve.stereo_figures import dropped_warning, repeat_warning
-from s2r.calib.solve.target_honest import merge_repeat_observations, mono_fit_heldout
-from s2r.calib.solve.target_stereo import _detect, _method, _skipped
-from s2r.calib.solve.targetcal import (
+from s2r.calib.solve.honesty.target import merge_repeat_observations, mono_fit_heldout
+from s2r.calib.solve.honesty.verdict import mono_verdict
+from s2r.calib.solve.pipelines.mono import MonoCalibration
+from s2r.calib.solve.pipelines.mono_figures import mono_projection
+from s2r.calib.solve.pipelines.stereo_figures import dropped_warning, repeat_warning
+from s2r.calib.solve.pipelines.target_stereo import _detect, _method, _skipped
+from s2r.calib.solve.solvers.targetcal import (
     CameraViews,
     centred_spread,
     fit_camera,
@@ -30,7 +31,6 @@ from s2r.calib.solve.targetcal import (
     quality_of,
     to_camera,
 )
-from s2r.calib.solve.verdict import mono_verdict
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
 from s2r.lens.fold import fold_warnings
 from s2r.lens.models import DEFAULT_LENS

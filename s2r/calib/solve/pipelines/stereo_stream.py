@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect import CornerCache, Detection, DetectItem, detect_stream
 from s2r.calib.detect.sharpness import BLUR_RATIO, BlurFilter
-from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.pipelines.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.calib.solve.views import REPEAT_PX, repeat_distance
 from s2r.errors import CalibrationError
 from s2r.lens.models import DEFAULT_LENS
@@ -105,7 +105,7 @@ def calibrate_stereo_stream(
     total: int | None = None,
 ) -> StereoCalibration:
     """Calibrate a stereo pair from the frames of ``source`` (module docstring); options as
-    :func:`s2r.calib.calibrate_stereo` (``target``/``lens`` as :mod:`s2r.calib.solve.target_stereo`).
+    :func:`s2r.calib.calibrate_stereo` (``target``/``lens`` as :mod:`s2r.calib.solve.pipelines.target_stereo`).
 
     Args:
         sources: the input files hashed into the profile's provenance.
@@ -151,7 +151,7 @@ def _solve(pairs: list[Pair], dropped: list[DroppedView], *, sources: Sequence[S
            square_m: float, name: str, distortion: str, max_error_px: float | None, fix_intrinsics: bool, swap: bool,
            jobs: int | None, target: AnyTarget | None, lens: str) -> StereoCalibration:
     if target is not None:
-        from s2r.calib.solve.target_stereo import calibrate_stereo_target_detections
+        from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target_detections
 
         return calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,

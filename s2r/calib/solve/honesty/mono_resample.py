@@ -2,7 +2,8 @@
 jackknife standard deviations.
 
 The used views are split into ``K`` interleaved folds (view i in fold ``i mod K``, as the stereo path:
-:func:`s2r.calib.solve.resample.split_folds`). Each fold (:mod:`s2r.calib.solve.mono_fold`) solves the other
+:func:`s2r.calib.solve.honesty.resample.split_folds`). Each fold (:mod:`s2r.calib.solve.honesty.mono_fold`) solves the
+other
 views, warm-started from the full solution with a loose stopping rule and the full solve's outlier rules. Then:
 
 - **Held-out error**: each held-out view gets one board pose fitted with the fold's intrinsics fixed; corners
@@ -25,11 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.solve.cvsolve import MonoSolution
-from s2r.calib.solve.heldout import HeldoutFigures, ParameterStd
-from s2r.calib.solve.models import ModelComparison, ModelScore, judge_models
-from s2r.calib.solve.mono_fold import MonoFoldOutcome, MonoFoldTask, run_mono_fold
-from s2r.calib.solve.resample import FOLDS, split_folds
+from s2r.calib.solve.honesty.heldout import HeldoutFigures, ParameterStd
+from s2r.calib.solve.honesty.models import ModelComparison, ModelScore, judge_models
+from s2r.calib.solve.honesty.mono_fold import MonoFoldOutcome, MonoFoldTask, run_mono_fold
+from s2r.calib.solve.honesty.resample import FOLDS, split_folds
+from s2r.calib.solve.solvers.cvsolve import MonoSolution
 from s2r.executor import local_pool
 from s2r.lens.models import LENS_MODELS
 
@@ -46,7 +47,7 @@ MAX_COMPARE_VIEWS = 16
 
 @dataclass(frozen=True)
 class MonoHeldout(HeldoutFigures):
-    """One camera's held-out error (:class:`s2r.calib.solve.heldout.HeldoutFigures`; corners left out by the
+    """One camera's held-out error (:class:`s2r.calib.solve.honesty.heldout.HeldoutFigures`; corners left out by the
     training solve's view rule; parameters ``MONO_PARAMETERS``) and the folds' intrinsics (K, D) (for the
     projection uncertainty)."""
 
@@ -125,7 +126,7 @@ def mono_heldout(obj: Sequence[Points], img: Sequence[Points], sol: MonoSolution
     the lens models of ``compare`` scored on the same folds (on at most ``MAX_COMPARE_VIEWS`` evenly spaced
     views, every model on the same ones; None without another model). None, None when there are too few views
     for two folds. ``lens``: ``pinhole`` or ``fisheye``; ``corner_factor``: the solve's single-corner rule (see
-    :mod:`s2r.calib.solve.mono_fold`)."""
+    :mod:`s2r.calib.solve.honesty.mono_fold`)."""
     n = len(img)
     if not split_folds(n, folds):
         return None, None

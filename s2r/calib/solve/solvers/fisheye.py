@@ -7,7 +7,7 @@
   partial views (REFERENCE.md). The pair is solved here instead with both cameras' intrinsics fixed (as the
   pinhole path does with CALIB_FIX_INTRINSIC): scipy's Levenberg-Marquardt-type ``least_squares`` over the
   right camera's pose and one board pose per view, residuals from ``cv2.fisheye.projectPoints`` in pixels.
-- Baseline uncertainty: first-order, two-step as :func:`s2r.calib.solve.cvsolve.baseline_covariance`:
+- Baseline uncertainty: first-order, two-step as :func:`s2r.calib.solve.solvers.cvsolve.baseline_covariance`:
   ``cov_E = sigma^2 A_EE^-1 + S cov_K S^T``.
 
 Points: ``obj`` board corners (N, 3) float32 metres per view; image corners (N, 2) float32 pixels.
@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from s2r.calib.solve.cvsolve import MonoSolution, StereoSolution
+from s2r.calib.solve.solvers.cvsolve import MonoSolution, StereoSolution
 from s2r.errors import CalibrationError
 
 __all__ = ["FisheyeMono", "fisheye_baseline_covariance", "solve_mono_fisheye", "solve_stereo_fisheye"]

@@ -2,10 +2,10 @@
 
 Each view is a set of (corner id, board point, image point), so views where the board is cut by the image
 edge count corner by corner. Each camera is solved on every view it saw (pinhole:
-``cv2.calibrateCameraExtended``; fisheye: :func:`s2r.calib.solve.fisheye.solve_mono_fisheye`), views above the
+``cv2.calibrateCameraExtended``; fisheye: :func:`s2r.calib.solve.solvers.fisheye.solve_mono_fisheye`), views above the
 robust threshold dropped and the solve repeated; then the pair is solved on the corners both cameras saw,
 matched by id (pinhole: ``cv2.stereoCalibrateExtended`` with the intrinsics fixed; fisheye:
-:func:`s2r.calib.solve.fisheye.solve_stereo_fisheye`), with the same outlier rule, the baseline's first-order
+:func:`s2r.calib.solve.solvers.fisheye.solve_stereo_fisheye`), with the same outlier rule, the baseline's first-order
 standard deviation, coverage counted over the corners actually seen, and the epipolar error after
 rectification.
 """
@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import Detection
 from s2r.calib.detect.coverage import PoseSpread, coverage_of, coverage_warnings, pose_spread
 from s2r.calib.detect.markers import usable_corners
-from s2r.calib.solve.cvsolve import (
+from s2r.calib.solve.solvers.cvsolve import (
     MonoSolution,
     StereoSolution,
     baseline_covariance,
@@ -32,7 +32,12 @@ from s2r.calib.solve.cvsolve import (
     solve_mono,
     solve_stereo,
 )
-from s2r.calib.solve.fisheye import FisheyeMono, fisheye_baseline_covariance, solve_mono_fisheye, solve_stereo_fisheye
+from s2r.calib.solve.solvers.fisheye import (
+    FisheyeMono,
+    fisheye_baseline_covariance,
+    solve_mono_fisheye,
+    solve_stereo_fisheye,
+)
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, match_corner_order, too_few_error
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel

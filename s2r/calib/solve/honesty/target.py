@@ -4,9 +4,9 @@ for one camera the held-out error with the jackknife std beside the covariance's
 - **Repeats**: a view whose corners (the same ids) lie within :data:`s2r.calib.solve.views.REPEAT_PX` (median)
   of an earlier view's (in each camera that saw the board) is a board held still; it is merged into that view
   so the standard deviations count each board pose once.
-- **One camera**: :func:`s2r.calib.solve.mono_resample.mono_heldout` over the solved views (partial views,
+- **One camera**: :func:`s2r.calib.solve.honesty.mono_resample.mono_heldout` over the solved views (partial views,
   either lens), the training solve's corner rule applied to held-out corners where the solve drops corners.
-- **A pair (joint solve)**: the stereo path's folds (:mod:`s2r.calib.solve.resample`: joint solve of the
+- **A pair (joint solve)**: the stereo path's folds (:mod:`s2r.calib.solve.honesty.resample`: joint solve of the
   training views warm-started from the full one; one board pose per held-out view fitted to both cameras) on
   the views matched by corner id, with the jackknife std of every parameter of ``PARAMETERS`` beside the
   covariance's.
@@ -19,11 +19,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from s2r.calib.solve.heldout import StereoHeldout, observations_heldout
-from s2r.calib.solve.mono_resample import MonoHeldout, mono_heldout, reported_std
-from s2r.calib.solve.observations import StereoObservation
-from s2r.calib.solve.pair import PairSolution
-from s2r.calib.solve.targetcal import CORNER_OUTLIER_FACTOR, MonoFit, Observation
+from s2r.calib.solve.honesty.heldout import StereoHeldout, observations_heldout
+from s2r.calib.solve.honesty.mono_resample import MonoHeldout, mono_heldout, reported_std
+from s2r.calib.solve.solvers.observations import StereoObservation
+from s2r.calib.solve.solvers.pair import PairSolution
+from s2r.calib.solve.solvers.targetcal import CORNER_OUTLIER_FACTOR, MonoFit, Observation
 from s2r.calib.solve.views import REPEAT_PX, repeat_distance, repeat_of
 from s2r.lens.models import LensModel
 from s2r.profile import DroppedView
