@@ -5,7 +5,7 @@ absolute path or ``../`` reads outside the scene's folder (``/etc/hostname``), a
 it declares (a builtin 30000x30000 texture: 5.5 GB). Here the scene is read the way ``profile from-description``
 reads an MJCF:
 
-- **Includes** go through the same resolver and budget (:func:`s2r.sources.mjcf_include.expand_includes`): files
+- **Includes** go through the same resolver and budget (:func:`s2r.sources.mjcf.include.expand_includes`): files
   inside the scene's folder only (no ``..``, absolute path or link out of it), regular files only (a FIFO or device
   is refused, never opened for blocking reads), 8 levels, 256 files, 2 MiB.
 - **Assets** (every attribute ``file`` / ``file*`` of any element: meshes, textures and their cube faces, height
@@ -31,8 +31,8 @@ from s2r.errors import RenderError, SourceError
 from s2r.fileio import NotARegularFile, read_regular_file, read_text_file
 from s2r.imageio import declared_size
 from s2r.sources.includes import MissingInclude, resolve
-from s2r.sources.mjcf_include import expand_includes
-from s2r.sources.mjcf_pose import where
+from s2r.sources.mjcf.include import expand_includes
+from s2r.sources.mjcf.pose import where
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["MAX_ASSET_BYTES", "MAX_ASSET_FILES", "MAX_HFIELD_SAMPLES", "MAX_REPLICATED_ELEMENTS",

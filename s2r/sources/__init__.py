@@ -8,8 +8,8 @@
 from __future__ import annotations
 
 from s2r.sources.conventions import CONVENTIONS, gazebo_to_opencv_distortion, opencv_to_gazebo_distortion
-from s2r.sources.gazebo_export import EXPORT_FORMATS, export_gazebo
-from s2r.sources.lint import Finding, lint_description
+from s2r.sources.export.gazebo import EXPORT_FORMATS, export_gazebo
+from s2r.sources.lint.rules import Finding, lint_description
 from s2r.sources.loader import load_description, select_pair, stereo_pair
 from s2r.sources.profile_builder import load_description_profile
 

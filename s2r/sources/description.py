@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
-    from s2r.sources.sdf_include import SkippedInclude
+    from s2r.sources.sdf.include import SkippedInclude
     from s2r.sources.simulator import SimulatorGuess
 
 __all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec"]

@@ -38,7 +38,7 @@ from s2r.sources.conventions import (
 )
 from s2r.sources.description import OPTICAL_SUFFIXES, CameraSpec, Description
 from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
-from s2r.sources.mjcf import SENSOR_TYPE as MJCF_SENSOR_TYPE
+from s2r.sources.mjcf.reader import SENSOR_TYPE as MJCF_SENSOR_TYPE
 
 __all__ = ["SEED_SGBM", "choose_convention", "load_description_profile", "profile_from_pair", "seed_matcher"]
 
@@ -238,7 +238,7 @@ def _mjcf_convention(description: Description, convention: str | None) -> str:
 
 def _check_geometry(description: Description, pair: StereoPair, *, allow: bool) -> None:
     """Refuse (or, when ``allow``, warn about) what lint reports about the pair's baseline; warn on offsets."""
-    from s2r.sources.lint_geometry import baseline_findings  # local: lint_geometry builds profiles itself
+    from s2r.sources.lint.geometry import baseline_findings  # local: lint_geometry builds profiles itself
 
     for severity, code, message, fix, line, needles in baseline_findings(description, pair):
         if description.source_text != description.expanded_text:  # xacro: the first source line with a needle

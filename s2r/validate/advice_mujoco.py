@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from s2r.profile import Camera, StereoProfile
-from s2r.sources.mujoco_export import PIXEL_PITCH_M, distortion_residual_px
+from s2r.sources.export.mujoco import PIXEL_PITCH_M, distortion_residual_px
 from s2r.validate.advice import Edit, _failed, _fmt
 from s2r.validate.params import ParamRow
 

@@ -174,7 +174,7 @@ def convention_notes(sim: StereoProfile, real: StereoProfile) -> list[str]:
 
 def _gazebo_xml(real: StereoProfile) -> str | None:
     try:
-        from s2r.sources.gazebo_export import export_gazebo
+        from s2r.sources.export.gazebo import export_gazebo
     except ImportError:  # pragma: no cover - the exporter ships with s2r.sources
         return None
     xml, warnings = export_gazebo(real, fmt="urdf")
@@ -207,7 +207,7 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
 
 def _mujoco_edit(sim: StereoProfile, real: StereoProfile) -> Edit:
     """The MJCF camera pair that renders like the real camera, with the lens residual MJCF cannot express."""
-    from s2r.sources.mujoco_export import distortion_residual_px
+    from s2r.sources.export.mujoco import distortion_residual_px
 
     worst = max(distortion_residual_px(real.left)[0], distortion_residual_px(real.right)[0])
     lens = f" (MJCF has no lens model: {worst:.2f} px left by the distortion)" if worst >= 0.01 else ""

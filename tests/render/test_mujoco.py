@@ -191,7 +191,7 @@ def test_export_mujoco_loads_and_holds_the_profile(tmp_path: Path, capsys: pytes
 
 
 def test_export_mujoco_residual_figures() -> None:
-    from s2r.sources.mujoco_export import distortion_residual_px
+    from s2r.sources.export.mujoco import distortion_residual_px
 
     cam = Camera(width_px=640, height_px=480, fx_px=500.0, fy_px=500.0, cx_px=319.5, cy_px=239.5,
                  distortion=Distortion(model="plumb_bob", coefficients=(-0.1, 0.0, 0.0, 0.0, 0.0)))

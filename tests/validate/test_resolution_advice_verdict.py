@@ -71,7 +71,7 @@ def test_advice_values_are_what_export_gazebo_writes() -> None:
     import re
     import xml.etree.ElementTree as ET
 
-    from s2r.sources.gazebo_export import export_gazebo
+    from s2r.sources.export.gazebo import export_gazebo
 
     real = make_rig(cx=331.25, cy=228.75, origin="real")
     left = real.left.model_copy(update={"fy_px": real.left.fx_px * 1.03})

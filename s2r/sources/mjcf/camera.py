@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 from s2r.errors import SourceError
 from s2r.profile import MAX_IMAGE_PX, MIN_IMAGE_PX
-from s2r.sources.mjcf_pose import numbers, where
+from s2r.sources.mjcf.pose import numbers, where
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["DEFAULT_OFFSCREEN", "MODES", "MjcfIntrinsics", "camera_intrinsics", "offscreen_size"]

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from s2r.errors import SourceError
 from s2r.sources.includes import IncludeBudget, MissingInclude, resolve
-from s2r.sources.mjcf_pose import where
+from s2r.sources.mjcf.pose import where
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["expand_includes"]

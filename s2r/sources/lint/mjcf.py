@@ -21,8 +21,8 @@ from s2r.geometry import invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.loader import StereoPair, optical_pose
-from s2r.sources.mjcf import T_MJCAM_OPTICAL
-from s2r.sources.mjcf_pose import quat_from_rotation
+from s2r.sources.mjcf.pose import quat_from_rotation
+from s2r.sources.mjcf.reader import T_MJCAM_OPTICAL
 
 __all__ = ["MjcfFinding", "mjcf_pair_findings", "mjcf_placement"]
 

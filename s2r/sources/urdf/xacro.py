@@ -5,7 +5,7 @@ outside a ROS install; here a package is looked up in the ``--package-path`` fol
 ``ROS_PACKAGE_PATH`` environment variable: a folder named ``pkg`` (or holding a ``package.xml`` whose
 ``<name>`` is ``pkg``) directly in, or up to three levels below, one of those folders.
 
-Expansion runs inside :func:`s2r.sources.xacro_sandbox.sandbox`: expressions are checked before xacro
+Expansion runs inside :func:`s2r.sources.urdf.xacro_sandbox.sandbox`: expressions are checked before xacro
 evaluates them, files are read only from the description's package and the package folders, and the
 environment is never read (see that module for what is allowed).
 """
@@ -23,7 +23,7 @@ from typing import Any
 from s2r.errors import SourceError
 from s2r.fileio import MAX_TEXT_BYTES, read_regular_file
 from s2r.sources.isolation import Limits, run_limited
-from s2r.sources.xacro_sandbox import UnsafeXacro, sandbox
+from s2r.sources.urdf.xacro_sandbox import UnsafeXacro, sandbox
 
 __all__ = ["PACKAGE_PATH_ENV", "XacroExpansion", "expand_xacro", "expand_xacro_files", "find_package", "is_xacro",
            "package_search_roots"]

@@ -26,7 +26,7 @@ from pathlib import Path
 from s2r.errors import SourceError
 from s2r.sources.includes import IncludeBudget, MissingInclude, is_cameraless, resolve
 from s2r.sources.isolation import Limits, run_limited
-from s2r.sources.xacro_sandbox import allowed_roots
+from s2r.sources.urdf.xacro_sandbox import allowed_roots
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["INCLUDE_LIMITS", "MODEL_PATH_ENVS", "SkippedInclude", "expand_includes", "model_search_roots"]

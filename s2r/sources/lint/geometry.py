@@ -41,7 +41,7 @@ def corrected_placement(description: Description, pair: StereoPair) -> tuple[str
     baseline = float(np.linalg.norm(T_now[:3, 3])) or 0.1
     T_new = make_transform(T_now[:3, :3], [baseline, 0.0, 0.0])
     if description.kind == "mjcf":
-        from s2r.sources.mjcf_lint import mjcf_placement
+        from s2r.sources.lint.mjcf import mjcf_placement
 
         text, line = mjcf_placement(description, pair, T_new)
         return text + " (in place of its orientation attribute)", line, ()

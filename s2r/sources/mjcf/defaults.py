@@ -13,7 +13,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
 from s2r.errors import SourceError
-from s2r.sources.mjcf_pose import ORIENTATIONS, where
+from s2r.sources.mjcf.pose import ORIENTATIONS, where
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["Defaults", "read_defaults"]

@@ -28,7 +28,7 @@ import numpy as np
 from s2r.errors import SourceError, terminal_safe
 from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from_focal
 from s2r.sources.description import CameraSpec, Description
-from s2r.sources.lint_geometry import baseline_findings
+from s2r.sources.lint.geometry import baseline_findings
 from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
 from s2r.sources.profile_builder import seed_matcher
 
@@ -313,7 +313,7 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
     if not any(f.severity == "error" and f.code.startswith("baseline-") for f in report.findings):
         _profile_rule(report, description, pair)  # a baseline error is the cause already named
     if mjcf:
-        from s2r.sources.mjcf_lint import mjcf_pair_findings
+        from s2r.sources.lint.mjcf import mjcf_pair_findings
 
         for severity, code, message, fix, line in mjcf_pair_findings(pair):
             report.add(severity, code, message, fix, line)

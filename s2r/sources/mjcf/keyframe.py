@@ -19,7 +19,7 @@ import numpy as np
 from s2r.errors import SourceError
 from s2r.geometry import make_transform
 from s2r.sources.description import FloatArray
-from s2r.sources.mjcf_pose import Compiler, numbers, rotation_from_quat, where
+from s2r.sources.mjcf.pose import Compiler, numbers, rotation_from_quat, where
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["BodyDofs", "JointDof", "keyframe_poses"]

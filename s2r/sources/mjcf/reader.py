@@ -1,12 +1,12 @@
 """MJCF (MuJoCo's ``<mujoco>`` models) to a :class:`Description`: bodies, their joints and the cameras.
 
-Read as MuJoCo compiles it: ``<include>`` expanded first (:mod:`s2r.sources.mjcf_include`), ``<compiler angle
-eulerseq>`` (:mod:`s2r.sources.mjcf_pose`), ``<default>`` classes (nested classes inherit; an element takes its
+Read as MuJoCo compiles it: ``<include>`` expanded first (:mod:`s2r.sources.mjcf.include`), ``<compiler angle
+eulerseq>`` (:mod:`s2r.sources.mjcf.pose`), ``<default>`` classes (nested classes inherit; an element takes its
 ``class``, else the nearest ``childclass`` of an enclosing body or frame, else ``main``), ``<frame>`` elements
 (their pose composes into their children) and every ``<worldbody>``. Each body becomes a pseudo-joint from its
 parent body (type ``fixed``, or its first joint's type: hinge, slide, ball, free), so the kinematics are the same
 as URDF's; the pose is the model's initial state (qpos0: the model as written), or a ``<keyframe>``'s
-(:mod:`s2r.sources.mjcf_keyframe`). Cameras (:mod:`s2r.sources.mjcf_camera`) become :class:`CameraSpec` objects whose
+(:mod:`s2r.sources.mjcf.keyframe`). Cameras (:mod:`s2r.sources.mjcf.camera`) become :class:`CameraSpec` objects whose
 ``T_link_camera`` is expressed, like Gazebo's, as the optical frame times ``T_LINK_OPTICAL``'s inverse, so lint and
 the profile builder need no MJCF branch for the geometry.
 """
@@ -23,11 +23,11 @@ import numpy as np
 from s2r.errors import SourceError
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, make_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec, LensIntrinsics
-from s2r.sources.mjcf_camera import MODES, camera_intrinsics, offscreen_size
-from s2r.sources.mjcf_defaults import Defaults, read_defaults
-from s2r.sources.mjcf_include import expand_includes
-from s2r.sources.mjcf_keyframe import BodyDofs, JointDof, keyframe_poses
-from s2r.sources.mjcf_pose import Compiler, local_pose, numbers, read_compiler, where
+from s2r.sources.mjcf.camera import MODES, camera_intrinsics, offscreen_size
+from s2r.sources.mjcf.defaults import Defaults, read_defaults
+from s2r.sources.mjcf.include import expand_includes
+from s2r.sources.mjcf.keyframe import BodyDofs, JointDof, keyframe_poses
+from s2r.sources.mjcf.pose import Compiler, local_pose, numbers, read_compiler, where
 from s2r.sources.xmlparse import XmlDoc
 
 __all__ = ["SENSOR_TYPE", "T_MJCAM_OPTICAL", "parse_mjcf"]
