@@ -70,9 +70,9 @@ def rectified_area_kept(description: Description, pair: StereoPair) -> tuple[flo
     """Fraction of the image area left valid by rectification: (this pair, the same pair with an ideal
     x-axis baseline of the same length). Uses :func:`s2r.rectification.stereo_rectification` (alpha 1)."""
     from s2r.rectification import stereo_rectification
-    from s2r.sources.profile_builder import profile_from_pair
+    from s2r.sources.pair_profile import profile_from_pair
 
-    builder_log = logging.getLogger("s2r.sources.profile_builder")
+    builder_log = logging.getLogger("s2r.sources.pair_profile")
     was_disabled, builder_log.disabled = builder_log.disabled, True  # its lens warnings are not about this area
     try:
         profile = profile_from_pair(description, pair, convention="exact")

@@ -30,7 +30,7 @@ from s2r.sources.conventions import CENTRE_OFFSET_PX, focal_from_hfov, hfov_from
 from s2r.sources.description import CameraSpec, Description
 from s2r.sources.lint.geometry import baseline_findings
 from s2r.sources.loader import StereoPair, load_description, log_notes, optical_pose, stereo_pair
-from s2r.sources.profile_builder import seed_matcher
+from s2r.sources.pair_profile import seed_matcher
 
 __all__ = ["SEVERITIES", "Finding", "lint_description"]
 
@@ -268,7 +268,7 @@ def _camera_info_rules(report: _Report, pair: StereoPair, info: Any) -> None:
 def _profile_rule(report: _Report, description: Description, pair: Any) -> None:
     """``invalid-profile`` (error): the pair breaks a physical bound of s2r.profile, so ``profile from-urdf``
     refuses it (lint and from-urdf agree)."""
-    from s2r.sources.profile_builder import profile_from_pair
+    from s2r.sources.pair_profile import profile_from_pair
 
     if float(np.linalg.norm(pair.T_left_right[:3, 3])) < 1e-6:
         return  # a zero baseline is the baseline-axis error already
