@@ -1,0 +1,43 @@
+"""Safe file input and output (split into modules next)."""
+
+from s2r.fileio.atomic import (
+    MAX_NPY_BYTES,
+    MAX_TEXT_BYTES,
+    TEMP_PREFIX,
+    NotARegularFile,
+    OutputBatch,
+    atomic_write_bytes,
+    atomic_write_npy,
+    atomic_write_text,
+    check_output_dir,
+    check_output_free,
+    npy_bytes,
+    prepare_output_dir,
+    read_file_head,
+    read_npy,
+    read_regular_file,
+    read_text_file,
+    removing_new_folders_on_failure,
+    sha256_file,
+)
+
+__all__ = [
+    "MAX_NPY_BYTES",
+    "MAX_TEXT_BYTES",
+    "TEMP_PREFIX",
+    "NotARegularFile",
+    "OutputBatch",
+    "atomic_write_bytes",
+    "atomic_write_npy",
+    "atomic_write_text",
+    "check_output_dir",
+    "check_output_free",
+    "npy_bytes",
+    "prepare_output_dir",
+    "read_file_head",
+    "read_npy",
+    "read_regular_file",
+    "read_text_file",
+    "removing_new_folders_on_failure",
+    "sha256_file",
+]
