@@ -1,170 +1,30 @@
-"""Safe file input and output: bounded reads of regular files only, atomic writes, no silent overwrites,
-content hashes for provenance. Parsing YAML and XML is :mod:`s2r.safeparse`."""
+"""Atomic writes: each output goes to a temporary file beside its name and is published whole (one file, or a
+batch of files all or none), never overwriting silently; a write error is one line with nothing written. Where
+outputs may go is checked by :mod:`s2r.fileio.outputs`."""
 
 from __future__ import annotations
 
 import contextlib
 import errno
-import hashlib
 import io
 import os
-import stat
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from s2r.errors import OutputExistsError, S2RError
+from s2r.fileio.outputs import (
+    TEMP_PREFIX,
+    _cannot_write,
+    _check_below_root,
+    _lstat,
+    _make_folders,
+    _refuse_special,
+    check_output_free,
+)
 
-__all__ = [
-    "MAX_NPY_BYTES",
-    "MAX_TEXT_BYTES",
-    "TEMP_PREFIX",
-    "NotARegularFile",
-    "OutputBatch",
-    "atomic_write_bytes",
-    "atomic_write_npy",
-    "atomic_write_text",
-    "check_output_dir",
-    "check_output_free",
-    "npy_bytes",
-    "prepare_output_dir",
-    "read_file_head",
-    "read_npy",
-    "read_regular_file",
-    "read_text_file",
-    "removing_new_folders_on_failure",
-    "sha256_file",
-]
-
-#: Folders created by this process, one list per active :func:`removing_new_folders_on_failure` block.
-_NEW_FOLDERS: list[list[Path]] = []
-
-
-@contextlib.contextmanager
-def removing_new_folders_on_failure() -> Iterator[None]:
-    """Within the block, output folders created here (:func:`prepare_output_dir`, an :class:`OutputBatch`'s
-    subfolders) are remembered; when the block ends with an exception (bad input found after ``-o DIR`` was
-    prepared, Ctrl-C, SIGTERM), those still empty are removed again, deepest first, so a refused run leaves
-    nothing behind and its rerun is not refused. The CLI runs every command inside one."""
-    made: list[Path] = []
-    _NEW_FOLDERS.append(made)
-    try:
-        yield
-    except BaseException:
-        for folder in reversed(made):
-            with contextlib.suppress(OSError):
-                folder.rmdir()  # only an empty folder: published files keep theirs
-        raise
-    finally:
-        _NEW_FOLDERS.remove(made)
-
-
-def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
-    """``folder.mkdir(parents=True, exist_ok=exist_ok)``, remembering each folder it created (see
-    :func:`removing_new_folders_on_failure`)."""
-    missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
-    folder.mkdir(parents=True, exist_ok=exist_ok)
-    if _NEW_FOLDERS:
-        _NEW_FOLDERS[-1].extend(reversed(missing))
-
-
-def _lstat(path: Path) -> os.stat_result | None:
-    """``os.lstat`` of ``path`` (the link itself, never its target); None when nothing is there.
-
-    A path whose parent is a file ("out.png/disparity.npy") is refused here, naming that parent.
-    """
-    try:
-        return os.lstat(path)
-    except FileNotFoundError:
-        return None
-    except NotADirectoryError:
-        parent = next((p for p in path.parents if p.exists() and not p.is_dir()), path.parent)
-        raise S2RError(f"cannot create folder: {parent} is a file, expected a folder", path=path,
-                       hint="choose an output folder") from None
-    except OSError as exc:
-        raise S2RError(f"cannot inspect output: {exc.strerror}", path=path, hint="choose another location") from None
-
-
-def _refuse_special(out: Path, st: os.stat_result) -> None:
-    """Refuse a symlink, folder, device node, FIFO or socket where a regular output file should be."""
-    mode = st.st_mode
-    if stat.S_ISLNK(mode):
-        raise OutputExistsError("is a symbolic link; s2r does not write through links, nothing was written",
-                                path=out, hint="give the link's target path itself, or another name")
-    if stat.S_ISDIR(mode):
-        raise OutputExistsError("is a folder, expected a file; nothing was written", path=out,
-                                hint="give a file name inside it")
-    if not stat.S_ISREG(mode):
-        raise OutputExistsError("is not a regular file (a device, FIFO or socket); nothing was written, even "
-                                "with --force", path=out, hint="choose a regular file name")
-
-
-def check_output_free(path: str | Path, *, force: bool) -> Path:
-    """Return ``path`` as a Path if s2r may write a regular file there; :class:`OutputExistsError` otherwise.
-
-    Refused always: a symlink, a folder, a device node (``/dev/null``), a FIFO or a socket at ``path``
-    (``--force`` never replaces them), and a path under a file. Refused unless ``force``: an existing file.
-    """
-    out = Path(path)
-    st = _lstat(out)
-    if st is None:
-        return out
-    _refuse_special(out, st)
-    if not force:
-        raise OutputExistsError("already exists; nothing was overwritten", path=out, hint="pass --force to replace it")
-    return out
-
-
-#: Every temporary file or folder s2r creates starts with this: clean-ups only ever touch such names.
-TEMP_PREFIX = ".s2r-tmp-"
-
-
-def _cannot_write(out: Path, exc: OSError) -> S2RError:
-    """The one-line error of a failed write (ENOSPC, EFBIG, EROFS, EACCES...): ``FILE: cannot write: REASON``."""
-    reason = exc.strerror or str(exc)
-    return S2RError(f"cannot write: {reason}; nothing was written", path=out,
-                    hint="free some space or choose a writable location")
-
-
-def _check_below_root(root: Path, out: Path) -> None:
-    """Refuse ``out`` unless every folder between ``root`` (exclusive) and ``out`` is missing or a real folder.
-
-    A symlink there (``R/left`` -> elsewhere) would carry the write outside the output: refused, even with
-    ``--force``. Missing folders are created one by one, each checked again after its creation.
-    """
-    try:
-        rel = out.relative_to(root)
-    except ValueError:
-        raise S2RError("is outside the output folder", path=out, hint=f"write inside {root}") from None
-    if len(rel.parts) > 1 and _lstat(root) is None:
-        try:
-            _make_folders(root)
-        except OSError as exc:
-            raise _cannot_write(root, exc) from None
-    current = root
-    for part in rel.parts[:-1]:
-        if part in ("..", "."):
-            raise S2RError("leaves the output folder", path=out, hint=f"write inside {root}")
-        current = current / part
-        st = _lstat(current)
-        if st is None:
-            try:
-                _make_folders(current, exist_ok=False)
-            except FileExistsError:
-                pass
-            except OSError as exc:
-                raise _cannot_write(current, exc) from None
-            st = _lstat(current)
-        if st is None or stat.S_ISLNK(st.st_mode):
-            raise OutputExistsError("is a symbolic link inside the output folder; s2r does not write through links, "
-                                    "nothing was written, even with --force", path=current,
-                                    hint="remove the link or choose another output folder")
-        if not stat.S_ISDIR(st.st_mode):
-            raise OutputExistsError("is a file, expected a folder; nothing was written", path=current,
-                                    hint="choose another output folder")
+__all__ = ["OutputBatch", "atomic_write_bytes", "atomic_write_npy", "atomic_write_text", "npy_bytes"]
 
 
 def _write_temporary(out: Path, data: bytes, *, sync: bool = True) -> str:
@@ -381,46 +241,6 @@ def atomic_write_text(path: str | Path, text: str, *, force: bool = False, root:
     return atomic_write_bytes(path, text.encode("utf-8"), force=force, root=root, durable=durable)
 
 
-def check_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Refuse (creating nothing) a symlink or non-folder, or a folder that holds files unless ``force``."""
-    out = Path(path)
-    st = _lstat(out)
-    if st is None:
-        return out
-    if stat.S_ISLNK(st.st_mode):
-        raise OutputExistsError("is a symbolic link; s2r does not write through links", path=out,
-                                hint="give the link's target folder itself, or another name")
-    if not stat.S_ISDIR(st.st_mode):
-        raise OutputExistsError("is a file, expected a folder; nothing was written", path=out,
-                                hint="choose another output folder")
-    if any(out.iterdir()) and not force:
-        raise OutputExistsError(
-            "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"
-        )
-    return out
-
-
-def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable.
-
-    Without ``force`` a folder that did not exist is created exclusively: when another run creates it between
-    the check and the ``mkdir``, this one stops instead of sharing it.
-    """
-    out = check_output_dir(path, force=force)
-    existed = _lstat(out) is not None
-    try:
-        _make_folders(out.parent)
-        _make_folders(out, exist_ok=force or existed)
-    except FileExistsError:
-        raise OutputExistsError("was created by another run meanwhile; nothing was overwritten", path=out,
-                                hint="pass --force to reuse it") from None
-    except OSError as exc:
-        raise S2RError(f"cannot create folder: {exc.strerror}", path=out, hint="choose a writable location") from exc
-    if not os.access(out, os.W_OK):
-        raise S2RError("folder is not writable", path=out, hint="choose a writable location")
-    return out
-
-
 def npy_bytes(array: Any) -> bytes:
     """``array`` as the bytes of a ``.npy`` file (no pickles)."""
     buffer = io.BytesIO()
@@ -431,137 +251,3 @@ def npy_bytes(array: Any) -> bytes:
 def atomic_write_npy(path: str | Path, array: Any, *, force: bool = False, root: str | Path | None = None) -> Path:
     """Write ``array`` as a ``.npy`` file (no pickles) through :func:`atomic_write_bytes`."""
     return atomic_write_bytes(path, npy_bytes(array), force=force, root=root)
-
-
-def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
-    """Hex SHA-256 of a file's content, read in chunks (constant memory)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        while chunk := handle.read(chunk_bytes):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
-#: Largest text input read (bytes): calibration and description files are kilobytes; the largest robot
-#: descriptions a few megabytes.
-MAX_TEXT_BYTES = 64 << 20
-
-
-class NotARegularFile(ValueError):
-    """An input path that is a device, FIFO or socket, or a file over the size limit (the message says which)."""
-
-
-def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None, follow_links: bool = True
-                      ) -> bytes:
-    """The bytes of the regular file ``path``, refusing anything that could read forever or block.
-
-    ``/dev/zero`` or ``/dev/urandom`` never end, a FIFO blocks until someone writes: the file is opened without
-    blocking and checked with ``fstat`` before a byte is read; a regular file over ``limit`` bytes is refused
-    from its size. ``dir_fd`` opens ``path`` relative to an open folder; ``follow_links=False`` refuses a
-    symbolic link at ``path`` (OSError) instead of reading its target (for caches confined to one folder).
-
-    Raises:
-        NotARegularFile: a device, FIFO or socket, or a file over ``limit`` bytes.
-        OSError: missing, unreadable, a folder.
-    """
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | (0 if follow_links else getattr(os, "O_NOFOLLOW", 0))
-    fd = os.open(path, flags, dir_fd=dir_fd)
-    try:
-        info = _regular_file_info(fd, path)
-        if info.st_size > limit:
-            raise NotARegularFile(f"{info.st_size} bytes, over the {limit >> 20} MiB s2r reads for this input")
-        with os.fdopen(fd, "rb", closefd=False) as fh:
-            # sized from fstat: read(limit + 1) would allocate the whole limit (512 MiB for an image) every call
-            data = fh.read(min(info.st_size, limit) + 1)
-            if len(data) > info.st_size:  # it grew after fstat: read on to the limit
-                data += fh.read(limit + 1 - len(data))
-        if len(data) > limit:  # the file grew after fstat: refuse rather than return a cut copy
-            raise NotARegularFile(f"over the {limit >> 20} MiB s2r reads for this input (it grew while being read)")
-        return data
-    finally:
-        os.close(fd)
-
-
-def _regular_file_info(fd: int, path: str | Path) -> os.stat_result:
-    """``fstat`` of the open ``fd``: a folder is IsADirectoryError, a device, FIFO or socket NotARegularFile."""
-    info = os.fstat(fd)
-    if stat.S_ISDIR(info.st_mode):
-        raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
-    if not stat.S_ISREG(info.st_mode):
-        raise NotARegularFile("not a regular file (a device, FIFO or socket): s2r reads files only")
-    return info
-
-
-@contextlib.contextmanager
-def _open_regular(path: str | Path) -> Iterator[io.BufferedReader]:
-    """``path`` opened for reading without blocking (a FIFO cannot hang the open), checked to be a regular file."""
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    with os.fdopen(fd, "rb") as handle:
-        _regular_file_info(fd, path)
-        yield handle
-
-
-def read_file_head(path: str | Path, nbytes: int) -> bytes:
-    """The first ``nbytes`` of the regular file ``path`` (all of it when shorter): a header to judge before the
-    whole file is read. Opened without blocking; a device, FIFO or socket is :class:`NotARegularFile`."""
-    with _open_regular(path) as handle:
-        return handle.read(nbytes)
-
-
-#: Largest ``.npy`` array read (bytes of data): a 4K float64 depth image is 66 MB.
-MAX_NPY_BYTES = 256 << 20
-
-
-def read_npy(path: str | Path, *, limit: int = MAX_NPY_BYTES) -> NDArray[Any]:
-    """A ``.npy`` array of plain numbers, checked from its header before any allocation.
-
-    The file must be a regular file (no FIFO or device: opened without blocking, checked with ``fstat``); its
-    header (format 1.0 or 2.0) must declare a bool, integer or float dtype (no objects, no pickles), a shape
-    whose data is at most ``limit`` bytes, and the file must hold that much data. Only the declared data is
-    read, so a sparse multi-gigabyte file with a small header costs nothing.
-
-    Raises:
-        NotARegularFile: a device, FIFO or socket.
-        ValueError: a malformed header, a refused dtype, a shape over ``limit`` or a truncated file.
-        OSError: missing, unreadable, a folder.
-    """
-    with _open_regular(path) as handle:
-        info = os.fstat(handle.fileno())
-        version = np.lib.format.read_magic(handle)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(handle)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(handle)
-        else:
-            raise ValueError(f".npy format version {version[0]}.{version[1]} is not supported (1.0 or 2.0)")
-        if dtype.hasobject or dtype.kind not in "biuf" or dtype.subdtype is not None:
-            raise ValueError(f"dtype {dtype} is not plain numbers")
-        count = 1
-        for side in shape:
-            count *= int(side)
-        nbytes = count * dtype.itemsize
-        if nbytes > limit:
-            raise ValueError(f"shape {shape} of {dtype} is {nbytes} bytes, over the {limit >> 20} MiB s2r reads")
-        if handle.tell() + nbytes > info.st_size:
-            raise ValueError(f"truncated: shape {shape} of {dtype} needs {nbytes} bytes of data")
-        buffer = bytearray(nbytes)
-        if handle.readinto(buffer) != nbytes:
-            raise ValueError("truncated while read")
-    array = np.frombuffer(buffer, dtype=dtype)
-    return array.reshape(shape, order="F" if fortran else "C")
-
-
-def read_text_file(path: str | Path, *, error: type[S2RError] = S2RError) -> str:
-    """A file's UTF-8 text; ``error`` (one line naming the file) when it is missing, unreadable, not a regular
-    file or over :data:`MAX_TEXT_BYTES`."""
-    source = Path(path)
-    try:
-        return read_regular_file(source, limit=MAX_TEXT_BYTES).decode("utf-8")
-    except FileNotFoundError:
-        raise error("file not found", path=source, hint="check the path") from None
-    except IsADirectoryError:
-        raise error("is a folder, not a file", path=source, hint="pass the file inside it") from None
-    except NotARegularFile as exc:
-        raise error(str(exc), path=source, hint="pass a calibration or description file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise error(f"cannot read: {exc}", path=source, hint="is this a text file?") from None
