@@ -130,7 +130,7 @@ def _cmd_lint(args: argparse.Namespace) -> int:
 
     info = None
     if args.camera_info is not None:
-        from s2r.formats.ros import read_camera_info
+        from s2r.formats.ros_read import read_camera_info
 
         info = read_camera_info(args.camera_info)
     xacro_args = parse_xacro_args(args.xacro_args + args.xacro_more)

@@ -288,7 +288,7 @@ def lint_description(path: str | Path, *, camera_info: Any = None, xacro_args: M
     Args:
         path: the description file.
         camera_info: an object with ``width``, ``height``, ``K`` (3x3, pixels) and optionally ``P`` (3x4)
-            and ``camera_name`` (as :func:`s2r.formats.ros.read_camera_info` returns).
+            and ``camera_name`` (as :func:`s2r.formats.ros_read.read_camera_info` returns).
         xacro_args, package_paths, env: as for :func:`s2r.sources.load_description_profile`.
         left, right: camera names when the pair is not unambiguous.
         keyframe: MJCF only: the ``<keyframe>`` (index or name) the bodies are read at.
