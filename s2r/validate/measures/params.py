@@ -97,7 +97,7 @@ def parameter_table(sim: StereoProfile, real: StereoProfile, tol: Tolerances) ->
 
     Intrinsics are compared at each profile's own resolution, in the pixel convention the profiles carry
     (``validate`` first converts both to OpenCV pixels with :meth:`StereoProfile.in_opencv_pixels`); the
-    projection difference (:mod:`s2r.validate.projection`) compares them after scaling to a common resolution.
+    projection difference (:mod:`s2r.validate.measures.projection`) compares them after scaling to a common resolution.
     """
     rows = [_size_row(sim, real, tol)]
     rows += _camera_rows("left", sim.left, real.left, tol)

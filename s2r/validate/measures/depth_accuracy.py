@@ -20,8 +20,8 @@ from numpy.typing import NDArray
 from s2r.errors import RenderError
 from s2r.profile import DEFAULT_SUBPIXEL_PX, StereoProfile
 from s2r.progress import ProgressCallback, report
-from s2r.validate.depth_sampling import BinSamples, frame_subpixel_rms, jitter_distances
-from s2r.validate.resolution import theory_rel_rms
+from s2r.validate.measures.depth_sampling import BinSamples, frame_subpixel_rms, jitter_distances
+from s2r.validate.measures.resolution import theory_rel_rms
 
 __all__ = ["DEFAULT_BINS_M", "BinStats", "DepthAccuracy", "DepthSamples", "bin_stats", "measure_depth_accuracy",
            "pixel_errors", "within_stats"]
@@ -193,9 +193,9 @@ def measure_depth_accuracy(profile: StereoProfile, *, preset: str = "profile",
                            scene_path: str | None = None, scene_camera: str | None = None) -> DepthAccuracy:
     """Render each ``(scene, distances_m)`` through ``profile``, run the depth pipeline with ``preset``, score.
 
-    Plane distances are jittered per frame (:func:`s2r.validate.depth_sampling.jitter_distances`); every frame's
-    pixels are pooled and binned by true depth (metres, rectified left frame); each bin gets a bootstrap interval
-    over frames, and planar frames give the pipeline's measured sub-pixel RMS.
+    Plane distances are jittered per frame (:func:`s2r.validate.measures.depth_sampling.jitter_distances`); every
+    frame's pixels are pooled and binned by true depth (metres, rectified left frame); each bin gets a bootstrap
+    interval over frames, and planar frames give the pipeline's measured sub-pixel RMS.
     """
     from s2r.depth.pipeline import StereoPipeline
 

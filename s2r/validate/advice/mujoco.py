@@ -18,8 +18,8 @@ import numpy as np
 
 from s2r.profile import Camera, StereoProfile
 from s2r.sources.export.mujoco import PIXEL_PITCH_M, distortion_residual_px
-from s2r.validate.advice import Edit, _failed, _fmt
-from s2r.validate.params import ParamRow
+from s2r.validate.advice.edits import Edit, _failed, _fmt
+from s2r.validate.measures.params import ParamRow
 
 __all__ = ["is_mujoco_sim", "mujoco_fovy_deg", "suggest_mujoco_edits"]
 

@@ -11,7 +11,7 @@ depth images, bag topics.
    T_rect_board`` for stereo, R1 the real rectification; device depth is already in the left camera), through
    SIM, and the renders go through SIM's pipeline with the same preset and metrics.
 3. Per distance bin, both sides side by side with bootstrap intervals and a verdict
-   (:mod:`s2r.validate.recording_bins`).
+   (:mod:`s2r.validate.recording.bins`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.quality.run import QualityResult, measure_board_views
 from s2r.quality.source import RecordingSource, open_source, parse_source
-from s2r.validate.recording_bins import compare_bins
+from s2r.validate.recording.bins import compare_bins
 from s2r.validate.tolerances import Tolerances
 from s2r.validate.verdict import Check
 

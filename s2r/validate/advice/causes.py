@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from s2r.profile import StereoProfile
-from s2r.validate.advice import Edit
-from s2r.validate.params import ParamRow
+from s2r.validate.advice.edits import Edit
+from s2r.validate.measures.params import ParamRow
 from s2r.validate.verdict import Check
 
 __all__ = ["CAUSE_TITLES", "RootCause", "group_failures"]
@@ -55,8 +55,8 @@ _OWN_PARAMS: dict[str, tuple[str, ...]] = {
     "baseline": ("baseline",),
     "rotation": ("inter-camera rotation",),
 }
-#: The edit (``Edit.parameter`` from :func:`s2r.validate.advice.suggest_edits`) that removes each cause.
-#: A MuJoCo sim's edits (:func:`s2r.validate.advice_mujoco.suggest_mujoco_edits`) are listed beside Gazebo's.
+#: The edit (``Edit.parameter`` from :func:`s2r.validate.advice.edits.suggest_edits`) that removes each cause.
+#: A MuJoCo sim's edits (:func:`s2r.validate.advice.mujoco.suggest_mujoco_edits`) are listed beside Gazebo's.
 _EDIT_FOR: dict[str, tuple[str, ...]] = {
     "resolution": ("resolution",),
     "focal": ("horizontal_fov", "fy", "fovy", "intrinsics"),

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 from s2r.errors import terminal_safe
 from s2r.htmlreport import ReportSection, html_table
 from s2r.quality.report import BIN_HEADERS, FRAME_HEADERS, bin_rows, frame_rows, quality_sections
-from s2r.validate.recording import RecordingComparison
+from s2r.validate.recording.compare import RecordingComparison
 
 if TYPE_CHECKING:
     from s2r.validate.run import ValidationResult

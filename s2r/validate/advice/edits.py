@@ -22,7 +22,7 @@ import numpy as np
 from s2r.geometry import T_LINK_OPTICAL, invert_transform, pose_from_opencv_extrinsics, rpy_from_rotation
 from s2r.profile import Camera, StereoProfile
 from s2r.sources.export.gazebo import lens_intrinsics
-from s2r.validate.params import ParamRow
+from s2r.validate.measures.params import ParamRow
 
 __all__ = ["Edit", "gazebo_hfov_rad", "right_joint_origin", "suggest_edits"]
 
