@@ -85,7 +85,7 @@ def _direct(rig: object, tmp: Path) -> tuple[np.ndarray, float]:
 
 
 def main() -> None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     reason = gl_unavailable_reason()
     if reason is not None:

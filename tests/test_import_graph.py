@@ -29,7 +29,7 @@ CV2_HOMES = {"lens", "calib", "depth", "render", "rectification", "imageio", "fo
              "validate", "quality", "drift", "sensor", "recordings"}
 PYBULLET_HOMES = {"render"}
 #: MuJoCo (an optional extra) is imported by one module only, lazily, when ``--renderer mujoco`` is asked for.
-MUJOCO_HOMES = {"render._mujoco"}
+MUJOCO_HOMES = {"render.mujoco.backend"}
 
 
 def _unit_of(dotted: str) -> str:

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from s2r.errors import RenderError
 from s2r.profile import StereoProfile
 from s2r.render.backend import RendererChoice, get_backend
-from s2r.render.poses import clip_planes
+from s2r.render.boards.poses import clip_planes
 from s2r.render.sensor import CameraSetup, Capture, capture
 from s2r.render.world import Surface
 from s2r.sensor.images import degrade_image

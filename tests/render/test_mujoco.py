@@ -29,7 +29,7 @@ mujoco = pytest.importorskip("mujoco", reason="the mujoco extra is not installed
 
 @pytest.fixture(scope="module", autouse=True)
 def _gl() -> None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     reason = gl_unavailable_reason()
     if reason is not None:
@@ -277,7 +277,7 @@ def test_missing_mujoco_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPa
 
 def test_gl_probe_names_the_platform_that_fails() -> None:
     """The probe runs in a child process; a platform that cannot render here is named in the reason."""
-    from s2r.render._mujoco import _probe
+    from s2r.render.mujoco.backend import _probe
 
     reason = _probe("no-such-platform")
     assert reason is not None and reason.startswith("MUJOCO_GL=no-such-platform:") and "\n" not in reason

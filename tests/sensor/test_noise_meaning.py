@@ -10,7 +10,7 @@ from pathlib import Path
 import cv2
 import pytest
 
-from s2r.render.boards import render_board_set
+from s2r.render.boards.sets import render_board_set
 from s2r.sensor.fit.images import BoardImage, image_noise_dn
 from s2r.sensor.fit.run import board_image, fit_images
 from s2r.sensor.model import SensorModel

@@ -7,7 +7,7 @@ frame is a robot's camera link (x forward, y left, z up) with the LEFT camera at
 - ``resolution="W H"``, ``sensorsize`` (a nominal 3 um pixel pitch; only ratios matter), ``focalpixel="fx fy"``
   and ``principalpixel="px py"`` with ``px = (W - 1) / 2 - cx`` and ``py = (H - 1) / 2 - cy`` (cx, cy in OpenCV's
   0-based pixel-centre convention; MuJoCo renders the optical axis at ``(W - 1) / 2 - px``: both offsets enter
-  with a minus sign, measured by rendering, see :mod:`s2r.render._mujoco`);
+  with a minus sign, measured by rendering, see :mod:`s2r.render.mujoco.backend`);
 - poses: a MuJoCo camera looks along its -z with +y up, i.e. ``R_body_cam = R_body_optical @ diag(1, -1, -1)``;
   the right camera's optical frame is ``T_left_right = [R | T]^-1`` from the profile's ``X_right = R X_left + T``.
 

@@ -1,7 +1,7 @@
 """Recovered calibration: render checkerboards through a profile, calibrate them, compare with the profile.
 
 This checks the whole chain on each profile: PyBullet renders the boards exactly through the declared
-camera model (:func:`s2r.render.boards.render_board_set`), s2r's own calibration
+camera model (:func:`s2r.render.boards.sets.render_board_set`), s2r's own calibration
 (:func:`s2r.calib.calibrate_stereo`) solves them, and each recovered parameter is compared with the
 declared one, in units of the calibration's predicted one-sigma standard deviation.
 """
@@ -126,7 +126,7 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
     """
     from s2r.calib import calibrate_stereo
     from s2r.render.backend import RendererChoice
-    from s2r.render.boards import render_board_set
+    from s2r.render.boards.sets import render_board_set
 
     with tempfile.TemporaryDirectory(prefix="s2r-validate-boards-") as tmp:
         out_dir = Path(tmp) if work_dir is None else work_dir

@@ -40,7 +40,7 @@ from scipy.spatial.transform import Rotation
 from s2r.errors import RenderError, SourceError
 from s2r.executor import child_environment
 from s2r.render.camera import PinholeView
-from s2r.render.mjcf_world import read_world
+from s2r.render.mujoco.world import read_world
 from s2r.render.world import Surface
 from s2r.sources.isolation import Limits, run_limited
 
@@ -155,7 +155,7 @@ def _one_line(exc: Exception) -> str:
 
 
 def load_spec(mj: Any, scene_path: str | None) -> Any:
-    """The MjSpec of ``scene_path`` as s2r read it (:func:`s2r.render.mjcf_world.read_world`: includes and assets
+    """The MjSpec of ``scene_path`` as s2r read it (:func:`s2r.render.mujoco.world.read_world`: includes and assets
     confined and bounded, MuJoCo opens no file), or an empty world lit flat (ambient only)."""
     if scene_path is None:
         spec = mj.MjSpec()
@@ -205,7 +205,7 @@ def check_scene(scene_path: str | None, camera: str | None, *, probe_gl: bool) -
     """Raise RenderError when MuJoCo is missing, the scene (and its camera) cannot be used, or (``probe_gl``, in a
     child process) no offscreen GL context can be created; no GL context is created in this process.
 
-    The scene is read here (:func:`s2r.render.mjcf_world.read_world`) and compiled once in a child process under
+    The scene is read here (:func:`s2r.render.mujoco.world.read_world`) and compiled once in a child process under
     :data:`COMPILE_LIMITS`, so what no attribute bounds (a mesh's hull, ``<replicate>``) cannot exhaust this one."""
     mj = _import_mujoco()
     if scene_path is not None:  # first (it reads files only): in this process, so every compile sees these bytes

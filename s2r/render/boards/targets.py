@@ -5,7 +5,7 @@ white margin of one square; Kalibr's AprilGrid as ``kalibr_create_target_pdf`` l
 from ``cv2.aruco.generateImageMarker`` with a 2-bit black border, turned 180 degrees, tag 0 at the bottom left,
 and black squares of the gap size at every tag corner; a Kalibr checkerboard is s2r's chessboard texture.
 
-Rendering and pose sampling work in the *grid frame* of :class:`~s2r.render.poses.BoardGeometry` (origin at the
+Rendering and pose sampling work in the *grid frame* of :class:`~s2r.render.boards.poses.BoardGeometry` (origin at the
 first corner of an equivalent corner grid, x right, y down, z into the board); ``T_grid_target`` maps the
 target's own frame (:mod:`s2r.targets`) into it, so the recorded truth is ``T_left_target = T_left_grid @
 T_grid_target``.
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from s2r.lens.distortion import project_points
 from s2r.profile import StereoProfile
-from s2r.render.poses import BoardGeometry
+from s2r.render.boards.poses import BoardGeometry
 from s2r.render.textures import DARK, LIGHT, checkerboard_texture
 from s2r.targets import AnyTarget, AprilGridTarget, CharucoTarget, CheckerboardTarget
 

@@ -2,7 +2,7 @@
 
 Output layout (what ``s2r calibrate`` reads): ``left/NN.png``, ``right/NN.png`` (BGR, the profile's image
 size, its distortion applied) and ``truth.yaml`` holding the profile used, the board and every pose as
-``T_left_board`` (board frame -> LEFT optical frame, metres; see :mod:`s2r.render.poses` for the board frame).
+``T_left_board`` (board frame -> LEFT optical frame, metres; see :mod:`s2r.render.boards.poses` for the board frame).
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ from s2r.fileio import OutputBatch
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.render.backend import RendererChoice, check_renderer, render_workers
+from s2r.render.boards.poses import BoardGeometry, sample_board_poses
+from s2r.render.boards.targets import TargetLayout, cut_views, target_layout
 from s2r.render.outputs import check_output_dir, clear_numbered, encode_png, numbered_names, remove_stale_numbered
 from s2r.render.parallel import run_jobs
-from s2r.render.poses import BoardGeometry, sample_board_poses
 from s2r.render.rig import StereoJob, check_render_options, render_stereo_images, stereo_setups
-from s2r.render.target_boards import TargetLayout, cut_views, target_layout
 from s2r.render.textures import checkerboard_texture, write_png
 from s2r.render.world import Surface, write_mesh
 from s2r.sensor.model import SensorModel

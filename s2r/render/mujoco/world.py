@@ -17,7 +17,7 @@ reads an MJCF:
   and every height field's samples are summed and bounded (:data:`MAX_TEXTURE_PIXELS`, :data:`MAX_HFIELD_SAMPLES`)
   before MuJoCo allocates anything, and so are the elements ``<replicate>`` expands to. What no attribute tells (a
   mesh's hull, a flexcomp's count) is bounded by compiling once in a limited child process
-  (:mod:`s2r.render._mujoco`).
+  (:mod:`s2r.render.mujoco.backend`).
 """
 
 from __future__ import annotations
