@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import FormatError
-from s2r.formats.realsense_db3 import parse_key_values
-from s2r.formats.realsense_recording import (
+from s2r.formats.realsense.db3 import parse_key_values
+from s2r.formats.realsense.recording import (
     DEPTH_STREAM,
     LEFT_STREAM,
     RIGHT_STREAM,

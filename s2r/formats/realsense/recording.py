@@ -11,7 +11,7 @@ follow as ``R = R2 R1^T``, ``T = t2 - R t1`` (``X_right = R X_left + T``); with 
 (as librealsense records a D4xx) that is Infrared 2's own extrinsic. ``/tf_static`` holds the inverse transforms
 (parent = reference, ROS's child pose in its parent) and is not read.
 
-The layout readers (:mod:`s2r.formats.realsense_db3`, :mod:`s2r.formats.realsense_bag`) turn a file into
+The layout readers (:mod:`s2r.formats.realsense.db3`, :mod:`s2r.formats.realsense.bag`) turn a file into
 :class:`RecordingFacts`; this module holds that model and builds the profile from it.
 """
 
@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from s2r.errors import FormatError
 from s2r.formats._common import build_stereo, provenance_for
-from s2r.formats.realsense import RealSenseIntrinsic, camera_from_intrinsic
+from s2r.formats.realsense.text import RealSenseIntrinsic, camera_from_intrinsic
 from s2r.profile import StereoProfile
 
 __all__ = ["BAG_MAGIC", "DEPTH_STREAM", "LEFT_STREAM", "RIGHT_STREAM", "RecordingFacts", "Row", "StreamFacts",
@@ -146,11 +146,11 @@ def read_recording(path: str | Path) -> RecordingFacts:
     source = Path(path)
     head = file_head(source, 16)
     if head.startswith(SQLITE_MAGIC):
-        from s2r.formats.realsense_db3 import read_db3_facts
+        from s2r.formats.realsense.db3 import read_db3_facts
 
         return read_db3_facts(source)
     if head.startswith(BAG_MAGIC):
-        from s2r.formats.realsense_bag import read_bag_facts
+        from s2r.formats.realsense.bag import read_bag_facts
 
         return read_bag_facts(source)
     raise FormatError("not a librealsense recording (neither an SQLite .db3 nor a ROS 1 .bag)", path=source,
@@ -161,10 +161,10 @@ def open_messages(facts: RecordingFacts) -> Any:
     """The recording's messages (a context manager with ``rows(topics)`` and ``load(row, limit=...)``), for the
     layout ``facts`` were read from."""
     if facts.layout == "ros2-sqlite3":
-        from s2r.formats.realsense_db3 import Db3Recording
+        from s2r.formats.realsense.db3 import Db3Recording
 
         return Db3Recording(facts.path)
-    from s2r.formats.realsense_bag import BagRecording
+    from s2r.formats.realsense.bag import BagRecording
 
     return BagRecording(facts.path)
 
