@@ -29,7 +29,7 @@ import numpy as np
 
 from s2r.errors import FormatError
 from s2r.formats._common import as_float, rotation_as_printed
-from s2r.formats.realsense.recording import HINT, RecordingFacts, Row, StreamFacts, file_head
+from s2r.formats.realsense.facts import HINT, RecordingFacts, Row, StreamFacts, file_head
 from s2r.formats.realsense.text import RealSenseIntrinsic
 
 __all__ = ["Db3Recording", "parse_key_values", "read_db3_facts"]
