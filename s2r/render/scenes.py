@@ -25,7 +25,7 @@ from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
 from s2r.render.backend import RendererChoice, check_renderer, render_workers
-from s2r.render.boards.poses import BoardGeometry, clip_planes
+from s2r.render.boards.poses import BoardGeometry
 from s2r.render.boards.sets import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
 from s2r.render.outputs import clear_numbered, encode_png, numbered_names, remove_stale_numbered
@@ -33,6 +33,7 @@ from s2r.render.parallel import run_jobs
 from s2r.render.rig import (
     StereoJob,
     check_render_options,
+    clip_planes,
     finish_image,
     render_stereo,
     render_stereo_images,

@@ -11,11 +11,11 @@ from pathlib import Path
 from s2r.errors import SourceError
 from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
-from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
+from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec, SkippedInclude
 from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.mjcf.reader import parse_mjcf
-from s2r.sources.sdf.include import SkippedInclude, expand_includes
+from s2r.sources.sdf.include import expand_includes
 from s2r.sources.sdf.reader import parse_sdf
 from s2r.sources.simulator import infer_simulator
 from s2r.sources.urdf.reader import parse_urdf

@@ -18,7 +18,8 @@ from scipy.spatial.transform import Rotation
 
 from s2r.errors import RenderError
 from s2r.lens.distortion import project_points
-from s2r.profile import Camera, SimulationSettings, StereoProfile
+from s2r.profile import Camera, StereoProfile
+from s2r.render.rig import clip_planes
 
 __all__ = ["BoardGeometry", "distance_range_m", "sample_board_poses"]
 
@@ -108,17 +109,6 @@ def _outline(board: BoardGeometry, per_edge: int) -> FloatArray:
 @functools.lru_cache(maxsize=16)
 def _centre(board: BoardGeometry) -> FloatArray:
     return _read_only(np.array([(board.pattern[0] - 1) / 2.0, (board.pattern[1] - 1) / 2.0, 0.0]) * board.square_m)
-
-
-@functools.lru_cache(maxsize=1)
-def _default_simulation() -> SimulationSettings:
-    return SimulationSettings()
-
-
-def clip_planes(profile: StereoProfile) -> tuple[float, float]:
-    """``(near, far)`` clip planes in metres: the profile's simulation settings or the defaults."""
-    sim = profile.simulation if profile.simulation is not None else _default_simulation()
-    return sim.clip_near_m, sim.clip_far_m
 
 
 def distance_range_m(profile: StereoProfile, board: BoardGeometry) -> tuple[float, float]:

@@ -11,7 +11,7 @@ Where a URI may point and how much may be included is :mod:`s2r.sources.includes
 depth, file, byte and element budget over the whole expansion). The expansion runs in a child process under CPU,
 memory and wall-clock limits as xacro does (:mod:`s2r.sources.isolation`; :data:`INCLUDE_LIMITS`, tighter).
 Includes that name nothing here (an unknown model, a web/Fuel URI) are left out and returned as
-:class:`SkippedInclude`: the caller decides whether the cameras asked for could be in them
+:class:`~s2r.sources.description.SkippedInclude`: the caller decides whether the cameras asked for could be in them
 (:func:`s2r.sources.loader.stereo_pair`).
 """
 
@@ -24,12 +24,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.errors import SourceError
+from s2r.sources.description import SkippedInclude
 from s2r.sources.includes import IncludeBudget, MissingInclude, is_cameraless, resolve
 from s2r.sources.isolation import Limits, run_limited
 from s2r.sources.urdf.xacro_sandbox import allowed_roots
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
-__all__ = ["INCLUDE_LIMITS", "MODEL_PATH_ENVS", "SkippedInclude", "expand_includes", "model_search_roots"]
+__all__ = ["INCLUDE_LIMITS", "MODEL_PATH_ENVS", "expand_includes", "model_search_roots"]
 
 MODEL_PATH_ENVS = ("GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "GAZEBO_MODEL_PATH")
 #: Resource limits of an SDF include expansion (the budget of :class:`IncludeBudget` stops it long before).
@@ -37,26 +38,6 @@ INCLUDE_LIMITS = Limits(cpu_s=5, memory_bytes=1 << 30, wall_s=8.0)
 _LIMIT_HINT = "includes that fan out or nest without end; fix the file"
 #: What an included file may hold instead of a ``<model>`` (Gazebo's own ``sun`` is a ``<light>``): no camera there.
 _NO_CAMERA_TAGS = ("light", "actor")
-
-
-@dataclass(frozen=True)
-class SkippedInclude:
-    """An include that names nothing reachable here, left out of the expansion.
-
-    ``message``, ``path``, ``field`` and ``hint`` are the error it is raised as when its models could hold a
-    camera that was asked for; ``cameraless`` when it names a standard model known to hold none (``model://sun``).
-    """
-
-    uri: str
-    message: str
-    path: str
-    field: str
-    hint: str
-    cameraless: bool
-
-    def error(self) -> SourceError:
-        """The error this include is when it cannot be skipped."""
-        return SourceError(self.message, path=self.path, field=self.field, hint=self.hint)
 
 
 @dataclass(frozen=True)

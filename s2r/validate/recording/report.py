@@ -3,17 +3,14 @@ bootstrap intervals and a verdict per bin)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from s2r.errors import terminal_safe
 from s2r.htmlreport import ReportSection, html_table
 from s2r.quality.report import BIN_HEADERS, FRAME_HEADERS, bin_rows, frame_rows, quality_sections
 from s2r.validate.recording.compare import RecordingComparison
 
-if TYPE_CHECKING:
-    from s2r.validate.run import ValidationResult
-
-__all__ = ["recording_lines", "recording_section", "recording_sections"]
+__all__ = ["WithRecording", "recording_lines", "recording_section", "recording_sections"]
 
 _HEADERS = ("bin m", "frames real/sim", "not scored real/sim", "Z accuracy % real", "sim", "plane-fit RMS % real",
             "sim", "sub-pixel RMS px real", "sim", "fill % real", "sim", "outliers % real", "sim", "verdict")
@@ -73,7 +70,15 @@ def recording_sections(comparison: RecordingComparison) -> list[ReportSection]:
             *quality_sections(comparison.real, real_title), *quality_sections(comparison.sim, sim_title)]
 
 
-def recording_section(result: ValidationResult) -> ReportSection | None:
+class WithRecording(Protocol):
+    """What :func:`recording_section` reads of a run's result (a :class:`~s2r.validate.run.ValidationResult`,
+    which is above this module)."""
+
+    @property
+    def recording(self) -> RecordingComparison | None: ...
+
+
+def recording_section(result: WithRecording) -> ReportSection | None:
     """The validation report's one recording section (None without ``--recording``): the side-by-side table,
     then each side's per-bin and per-frame tables (captioned)."""
     if result.recording is None:
