@@ -2,9 +2,9 @@
 jackknife standard deviations.
 
 The used views are split into ``K`` interleaved folds (view i in fold ``i mod K``, as the stereo path:
-:func:`s2r.calib.solve.honesty.resample.split_folds`). Each fold (:mod:`s2r.calib.solve.honesty.mono_fold`) solves the
-other
-views, warm-started from the full solution with a loose stopping rule and the full solve's outlier rules. Then:
+:func:`s2r.calib.solve.honesty.resample.split_folds`). Each fold (:mod:`s2r.calib.solve.honesty.mono_fold`) solves
+the other views, warm-started from the full solution with a loose stopping rule and the full solve's outlier rules.
+Then:
 
 - **Held-out error**: each held-out view gets one board pose fitted with the fold's intrinsics fixed; corners
   the training rules would leave out (a view beyond the robust view threshold; with a corner rule, a corner far

@@ -1,9 +1,8 @@
 """The joint solve of a target calibration: both cameras, extrinsics and board poses on corners matched by id.
 
 Started from the per-camera fits of :mod:`s2r.calib.solve.pipelines.target_stereo`; the solve itself is issue 11's
-joint solver
-(:mod:`s2r.calib.solve.solvers.joint` through ``solve.pair._joint``, which has no public name yet), run with the pinhole
-lens models or the equidistant :data:`s2r.lens.models.FISHEYE`.
+joint solver (:mod:`s2r.calib.solve.solvers.joint` through ``solvers.pair._joint``, which has no public name yet), run
+with the pinhole lens models or the equidistant :data:`s2r.lens.models.FISHEYE`.
 """
 
 from __future__ import annotations
@@ -39,9 +38,8 @@ def joint_solve(names: Sequence[str], obs_l: list[Observation | None], obs_r: li
                  lens: str, distortion: str, max_error_px: float | None
                  ) -> tuple[list[StereoObservation], PairSolution]:
     """The joint solve (:mod:`s2r.calib.solve.solvers.joint`) of every view either camera kept, started from the mono
-    fits:
-    R, T the consensus of the views both saw, each view's board pose from the left fit (or from the right
-    fit moved into the left camera)."""
+    fits: R, T the consensus of the views both saw, each view's board pose from the left fit (or from the right fit
+    moved into the left camera)."""
     R, T = _consensus([(fit_l.solution.rvecs[v.idx_l], fit_l.solution.tvecs[v.idx_l], fit_r.solution.rvecs[v.idx_r],
                         fit_r.solution.tvecs[v.idx_r]) for v in views])
     joint_obs, rv, tv = [], [], []
