@@ -15,7 +15,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "s2r"
 #: import only from lower layers (or from its own unit). formats and sources share a layer and must not import each
 #: other; so do calib, depth and render.
 LAYERS: dict[str, int] = {
-    "_version": 0, "errors": 0, "progress": 0, "limits": 0, "names": 0,
+    "_version": 0, "errors": 0, "progress": 0, "limits": 0, "names": 0, "lazy": 0,
     "fileio": 1, "safeparse": 1, "geometry": 1, "executor": 1,  # none of these import each other
     "sensor.model": 1,  # the sensor model's type, carried by profiles
     "profile": 2, "targets": 2,

@@ -11,8 +11,9 @@ load the solver, so ``s2r calibrate`` can start detecting while the solver's mod
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from s2r.lazy import lazy_names
 
 if TYPE_CHECKING:
     from s2r.calib.detect import CornerCache, Detection, detect_board
@@ -41,15 +42,4 @@ __all__ = ["MAX_SOLVE_VIEWS", "MIN_VIEWS", "CornerCache", "Coverage", "Detection
            "PoseSpread", "StereoCalibration", "ViewError", "calibrate_mono", "calibrate_stereo", "calibrate_stereo_bag",
            "detect_board", "find_mono_images", "find_stereo_pairs", "match_corner_order"]
 
-
-def __getattr__(name: str) -> Any:
-    """Load a public name's module on first use."""
-    if name not in _HOMES:
-        raise AttributeError(f"module 's2r.calib' has no attribute {name!r}")
-    value = getattr(importlib.import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOMES])
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())

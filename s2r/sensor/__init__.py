@@ -16,8 +16,9 @@ layer loads neither OpenCV nor the formats.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from s2r.lazy import lazy_names
 
 if TYPE_CHECKING:
     from s2r.sensor.depth import degrade_depth, depth_edges, nearest_fill
@@ -36,15 +37,4 @@ _HOMES = {
 __all__ = ["FillPoint", "SensorModel", "blur_image", "degrade_depth", "degrade_image", "depth_edges",
            "dump_sensor_model", "load_sensor_model", "nearest_fill", "sensor_model_yaml"]
 
-
-def __getattr__(name: str) -> Any:
-    """Load a public name's module on first use."""
-    if name not in _HOMES:
-        raise AttributeError(f"module 's2r.sensor' has no attribute {name!r}")
-    value = getattr(importlib.import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOMES])
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())
