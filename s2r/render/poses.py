@@ -45,7 +45,8 @@ CORNER_MAX_VIEW_DEG = 58.0
 #: ... and below this ratio of shortest to longest imaged square side (steep perspective).
 CORNER_MIN_SQUARE_RATIO = 0.58
 _CORNER_TRIES = 600
-#: Refinement candidates scored together (those after a new best are redrawn around it).
+#: Candidates scored together: refinement steps (those after a new best are redrawn around it) and grid-view
+#: fallbacks (the first that fits wins).
 _REFINE_BATCH = 12
 _CELL_SAFETY_PX = 4.0
 _EDGE_MARGIN_PX = 3.0
@@ -205,27 +206,11 @@ def _fits_many(profile: StereoProfile, board: BoardGeometry, T: FloatArray, *,
     return ok
 
 
-def _candidate(profile: StereoProfile, board: BoardGeometry, target: FloatArray, d: float, tilt: FloatArray,
-               roll: float) -> FloatArray:
-    return _candidate_in(profile.left, board, target, d, tilt, roll)
-
-
-def _candidate_in(cam: Camera, board: BoardGeometry, target: FloatArray, d: float, tilt: FloatArray,
-                  roll: float) -> FloatArray:
-    """``T_cam_board`` with the board centre ``d`` metres along pixel ``target``'s (pinhole) ray, tilted by
-    rotation vector ``tilt`` (camera frame, radians) after an in-plane ``roll`` (radians)."""
-    ray = np.array([(target[0] - cam.cx_px) / cam.fx_px, (target[1] - cam.cy_px) / cam.fy_px, 1.0])
-    R = Rotation.from_rotvec(tilt).as_matrix() @ Rotation.from_euler("z", roll).as_matrix()
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = d * ray - R @ board.centre()
-    return T
-
-
 def _candidates_in(cam: Camera, board: BoardGeometry, target: FloatArray, d: FloatArray, tilt: FloatArray,
                    roll: FloatArray) -> FloatArray:
-    """:func:`_candidate_in` of n candidates at once: ``target`` (n, 2) px, ``d`` (n,) m, ``tilt`` (n, 3) and
-    ``roll`` (n,) rad; (n, 4, 4)."""
+    """``T_cam_board`` (n, 4, 4) of n candidates: the board centre ``d`` (n,) metres along pixel ``target``'s
+    (n, 2) pinhole ray, tilted by rotation vectors ``tilt`` (n, 3) (camera frame, radians) after an in-plane
+    ``roll`` (n,) (radians)."""
     ray = np.column_stack([(target[:, 0] - cam.cx_px) / cam.fx_px, (target[:, 1] - cam.cy_px) / cam.fy_px,
                            np.ones(len(target))])
     R = Rotation.from_rotvec(tilt).as_matrix() @ Rotation.from_euler("z", roll[:, None]).as_matrix()
@@ -389,10 +374,13 @@ def _grid_pose(profile: StereoProfile, board: BoardGeometry, k: int, pos: FloatA
     :func:`_schedule` until it fits both images."""
     cam = profile.left
     half, centre = np.array([cam.width_px / 2.0, cam.height_px / 2.0]), np.array([cam.cx_px, cam.cy_px])
-    for shrink, d, relax in _schedule(d0, hi):
-        T = _candidate(profile, board, centre + shrink * pos * half, d, tilt * relax, roll * relax)
-        if _fits(profile, board, T):
-            return T
+    schedule = np.array(list(_schedule(d0, hi)))
+    for chunk in np.array_split(schedule, range(_REFINE_BATCH, len(schedule), _REFINE_BATCH)):
+        shrink, d, relax = chunk.T
+        T = _candidates_in(cam, board, centre + shrink[:, None] * pos * half, d, tilt * relax[:, None], roll * relax)
+        fits = np.flatnonzero(_fits_many(profile, board, T))
+        if len(fits):  # the first that fits, in the order of the schedule
+            return np.asarray(T[fits[0]], np.float64)
     raise RenderError(
         f"view {k}: the board does not fit inside both images at any sampled pose",
         field="pattern", hint="use a smaller board (--pattern / --square) or check the profile's extrinsics",
