@@ -14,11 +14,11 @@ Rounds are interleaved (anchor, s2r, anchor, ...) so load from other processes h
 medians over ``--rounds``, CPU seconds (user + system, of the child and every process it started) first, since
 they hold under load, then wall seconds, with the load average beside them. The issue's bar: s2r <= 1.2x.
 
-Figures (2026-12-06, 2 shared cores, load 5.1-5.4, 13 pairs, median of 5 interleaved rounds, whole process):
-before this session (the same script with the old tree on PYTHONPATH) plain 3.27 CPU s / 3.25 s wall, s2r 5.79 CPU s
-(1.77x) / 6.05 s (1.86x); in-process SIFT 3.19, ORB 1.58, fit 0.99 CPU s. After: plain 3.48 / 3.72 s, s2r 4.82 CPU s
-(**1.39x**) / 7.52 s wall (2.02x: the wall clock at load 5 on 2 cores is not a figure to compare); in-process SIFT
-2.84, ORB 0.99, fit 0.33. The rest over the anchor: ORB (its detection and matching of ~3000 features a frame,
+Figures (2026-12-06, 2 shared cores, 13 pairs, whole process, interleaved rounds; the old tree on PYTHONPATH for
+"before"). At load 2.4-2.9: before plain 3.11 CPU s / 2.07 s wall, s2r 5.49 CPU s (1.77x) / 4.14 s (2.00x); after
+plain 3.17 / 2.55 s, s2r 4.05 CPU s (**1.28x**) / 3.90 s (1.53x). At load 5.1-5.4: before 1.77x CPU (in-process
+SIFT 3.19, ORB 1.58, fit 0.99 CPU s), after 1.39x CPU (SIFT 2.84, ORB 0.99, fit 0.33); the wall clock at that load
+(2.02x) is not a figure to compare. The rest over the anchor: ORB (its detection and matching of ~3000 features a frame,
 0.08 CPU s a pair: the second detector's estimators widen sigma, so they stay), the fit (five jackknifed
 estimators, 0.33 s) and s2r's imports (pydantic and the profile models, ~0.2 s more than ``import cv2``).
 
