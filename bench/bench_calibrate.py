@@ -45,6 +45,11 @@ shared, so the median of the repeats and the ratio of the medians are printed):
 - whole process: the plain script above as its own process (``python -c``) against the installed ``s2r
   calibrate`` console script (fresh output folder, so a fresh corner cache), start to exit, as a user times them.
 
+2026-12-06 (issue 35, no change to calibrate): --only-full --repeats 5 at load 6.7-8.1: whole process 0.76x wall
+(plain 1.81 s, s2r 2.39 s), 0.67x CPU (plain 1.07 s, s2r 1.60 s), detection alone 1.18x; the solve after
+detection (joint solve, 4 jackknife folds, 16 lens-comparison folds, bent board) is ~0.6 CPU s against the plain
+script's 0.05 s, and s2r's imports ~0.15 s more than numpy + cv2.
+
 Usage: .venv/bin/python bench/bench_calibrate.py [--pairs 100] [--blank 20] [--memory-pairs 500] [--jobs 2]
        .venv/bin/python bench/bench_calibrate.py --only-full --repeats 9   (the 40-pair first-run table only)
 Timings on a shared machine are disturbed by other load: compare the ratios, measured in one run.

@@ -7,6 +7,13 @@
 rounds interleaved (quick, default, quick, ...): median wall time, CPU time of the command and every process
 it started (user + system, less disturbed by other load than the wall clock), and the load average beside
 them. The issue's bars (idle 2-core machine): --quick <= 8 s, default <= 15 s.
+2026-12-06 (issue 35), 2 shared cores at load 4.7-6.7 (no idle machine was to be had): --quick 12.3 CPU s / 14.1 s
+wall, default 26.8 CPU s / 34.3 s wall. This session's change (the board-pose search scored in batches: the same
+poses, 0.82-0.86 -> 0.27-0.29 CPU s per profile, two profiles per run) read --quick 12.7 -> 11.5 CPU s and 13.2 ->
+11.6 s wall at load 3.6-5.1 (2 interleaved rounds against the old tree on PYTHONPATH; 13.7 -> 13.0 CPU s in 3 rounds
+at load 5-6), default 30.5 -> 29.4 CPU s at load 4-4.7; the --json results are identical but for the timings.
+Where --quick's CPU goes (in-process, jobs=1): PyBullet's TinyRenderer (80 images, ~5 s), the depth pipeline's SGBM
+(~1 s), two calibrations (~1 s), the pose search (~0.6 s), textures and PNG round trips of the boards (~0.7 s).
 
 Prints the wall time of the whole run and the time of each stage per profile (render boards, calibrate,
 render scenes, depth pipeline), then, on the same rendered data, s2r's calibration and depth pipeline beside

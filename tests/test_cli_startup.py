@@ -141,3 +141,11 @@ def test_validation_without_a_report_does_not_load_matplotlib() -> None:
              "print(before, 'matplotlib' in sys.modules, callable(write_validation_report))")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "True", "True"]
+
+
+def test_a_drift_check_loads_no_scipy_or_matplotlib() -> None:
+    """``s2r check`` needs OpenCV (features, rectification) but neither SciPy (its rotations cost ~0.3 s of
+    imports, a tenth of a check) nor Matplotlib (only for --report)."""
+    loaded = _loaded_after("import s2r.cli.check_cmd, s2r.drift.check, s2r.drift.estimate, s2r.drift.source, "
+                           "s2r.drift.swap, s2r.drift.verdict")
+    assert "cv2" in loaded and "scipy" not in loaded and "matplotlib" not in loaded

@@ -101,18 +101,22 @@ def _rectify_points(cam: Camera, pts: FloatArray, R: FloatArray, P: FloatArray) 
 
 
 def _mutual_matches(desc_l: NDArray[Any], desc_r: NDArray[Any], norm: int) -> list[tuple[int, int]]:
-    """Index pairs (left, right) that pass the ratio test and are each other's best match."""
+    """Index pairs (left, right) that pass the ratio test and are each other's best match.
+
+    The backward search (right -> left) runs only for the right descriptors some left one passed the ratio test
+    with: brute force handles each query row alone, so their best matches are those of a search over every
+    right descriptor, at a fraction of its cost (the mutual check needs no others).
+    """
     matcher = cv2.BFMatcher(norm)
-    forward = matcher.knnMatch(desc_l, desc_r, k=2)
-    backward = {m.queryIdx: m.trainIdx for m, *_ in matcher.knnMatch(desc_r, desc_l, k=1) if m is not None}
-    pairs = []
-    for candidates in forward:
-        if len(candidates) < 2:
-            continue
-        best, second = candidates
-        if best.distance < RATIO * second.distance and backward.get(best.trainIdx) == best.queryIdx:
-            pairs.append((best.queryIdx, best.trainIdx))
-    return pairs
+    forward = [c for c in matcher.knnMatch(desc_l, desc_r, k=2) if len(c) == 2]
+    candidates = [(best.queryIdx, best.trainIdx) for best, second in forward
+                  if best.distance < RATIO * second.distance]
+    if not candidates:
+        return []
+    wanted = np.unique(np.fromiter((j for _, j in candidates), np.int64, len(candidates)))
+    backward = {int(wanted[m.queryIdx]): m.trainIdx
+                for m, *_ in matcher.knnMatch(np.ascontiguousarray(desc_r[wanted]), desc_l, k=1) if m is not None}
+    return [(i, j) for i, j in candidates if backward.get(j) == i]
 
 
 def _detect(image: NDArray[np.uint8], kind: str, max_features: int

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from s2r.profile import StereoProfile
 from s2r.rectification import StereoRectification
@@ -55,6 +55,12 @@ class RotationFit:
     model: str
 
 
+def _rotation(omega: FloatArray) -> FloatArray:
+    """3x3 rotation matrix of the rotation vector ``omega`` (3,) rad (OpenCV's Rodrigues: cv2 is loaded here
+    anyway, SciPy's rotations would add ~0.3 s of imports to every check)."""
+    return np.asarray(cv2.Rodrigues(np.asarray(omega, np.float64).reshape(3, 1))[0], np.float64)
+
+
 def _points(rect: StereoRectification, left: FloatArray, disparity: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Homogeneous points in the LEFT optical frame: (N, 3) directions and (N,) inverse depths (1/m scale)."""
     P1 = rect.P1
@@ -68,7 +74,7 @@ def predict_right(profile: StereoProfile, rect: StereoRectification, left: Float
                   omega: FloatArray, *, model: str) -> FloatArray:
     """(N, 2) rectified right pixels predicted for a rig turned by ``omega`` (rad, right optical axes)."""
     direction, inv_depth = _points(rect, left, disparity)
-    dR = Rotation.from_rotvec(np.asarray(omega, np.float64)).as_matrix()
+    dR = _rotation(omega)
     T = profile.T.reshape(3)
     in_right = direction @ profile.R.T + np.outer(inv_depth, T)  # R X + T w (homogeneous)
     if model == "centre":
@@ -90,17 +96,41 @@ def robust_scale(residuals: FloatArray) -> float:
     return float(1.4826 * np.median(np.abs(residuals))) if len(residuals) else float("nan")
 
 
-def _jacobian(profile: StereoProfile, rect: StereoRectification, left: FloatArray, disparity: FloatArray,
-              omega: FloatArray, model: str) -> FloatArray:
-    """(N, 3) d(right row)/d(omega), px/rad, by central differences."""
-    columns = []
-    for axis in range(3):
-        step = np.zeros(3)
-        step[axis] = _EPS_RAD
-        up = predict_right(profile, rect, left, disparity, omega + step, model=model)[:, 1]
-        down = predict_right(profile, rect, left, disparity, omega - step, model=model)[:, 1]
-        columns.append((up - down) / (2 * _EPS_RAD))
-    return np.column_stack(columns)
+class _Rows:
+    """The right rows :func:`predict_right` gives for fixed matches, for many rotations at once.
+
+    What does not depend on ``omega`` (the matches' points in the right camera's frame, the profile's ``T``
+    term) is computed once; each rotation then costs one (N, 3) x (3, 2) product. Used by the fit, whose
+    Gauss-Newton step needs the rows at ``omega`` and at ``omega +/- eps`` on each axis (7 rotations) every
+    iteration.
+    """
+
+    def __init__(self, profile: StereoProfile, rect: StereoRectification, left: FloatArray,
+                 disparity: FloatArray, model: str) -> None:
+        if model not in MODELS:
+            raise ValueError(f"unknown model {model!r}; one of {MODELS}")
+        direction, inv_depth = _points(rect, left, disparity)
+        moved = np.outer(inv_depth, profile.T.reshape(3))
+        self.turned = direction @ profile.R.T + (moved if model == "centre" else 0.0)  # turned by dR
+        self.fixed = (np.zeros((len(left), 2)) if model == "centre"  # not turned (translation model)
+                      else moved @ rect.R2[1:3].T)
+        self.R2 = rect.R2
+        self.f, self.c = float(rect.P2[1, 1]), float(rect.P2[1, 2])
+
+    def rows(self, omegas: FloatArray) -> FloatArray:
+        """(N, K) predicted rectified right rows (px) for (K, 3) rotation vectors ``omegas`` (rad)."""
+        M = self.R2 @ np.array([_rotation(w) for w in omegas])  # (K, 3, 3): rectified from unturned
+        yz = self.turned @ M[:, 1:3, :].transpose(2, 0, 1).reshape(3, -1)  # (N, 2K): rows y, z per rotation
+        y = yz[:, 0::2] + self.fixed[:, :1]
+        z = yz[:, 1::2] + self.fixed[:, 1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.asarray(self.f * y / z + self.c, np.float64)
+
+    def rows_and_jacobian(self, omega: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(N,) rows at ``omega`` and (N, 3) d(row)/d(omega), px/rad, by central differences."""
+        steps = np.vstack([np.zeros(3), _EPS_RAD * np.eye(3), -_EPS_RAD * np.eye(3)])
+        rows = self.rows(omega + steps)
+        return rows[:, 0], (rows[:, 1:4] - rows[:, 4:7]) / (2 * _EPS_RAD)
 
 
 def lens_nuisance(rect: StereoRectification, left: FloatArray) -> FloatArray:
@@ -134,13 +164,11 @@ def fit_rotation(profile: StereoProfile, rect: StereoRectification, left: FloatA
     A = np.zeros((len(params), len(params)))
     scale = 1e-3
 
-    def residual_of(p: FloatArray) -> FloatArray:
-        predicted = predict_right(profile, rect, left, disparity, p[:3], model=model)[:, 1] + extra @ p[3:]
-        return np.asarray(right[:, 1] - predicted, np.float64)
-
+    predictor = _Rows(profile, rect, left, disparity, model)
     for _ in range(iterations):
-        residual = residual_of(params)
-        J = np.hstack([_jacobian(profile, rect, left, disparity, params[:3], model), extra])
+        rows, J_rot = predictor.rows_and_jacobian(params[:3])
+        residual = np.asarray(right[:, 1] - (rows + extra @ params[3:]), np.float64)
+        J = np.hstack([J_rot, extra])
         usable = np.isfinite(residual) & np.isfinite(J).all(axis=1)
         if usable.sum() < len(params) + 1:
             return nan
