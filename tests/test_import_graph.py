@@ -231,3 +231,20 @@ def test_parts_of_a_package_import_one_way() -> None:
                 if other is not None and other in rank and rank[other] > rank[part]:
                     wrong.append(f"{module} imports {target} ({package}: {part} is below {other})")
     assert not wrong, "wrong-way imports inside a package:\n" + "\n".join(sorted(wrong))
+
+
+#: The house rule (DESIGN.md): a module a stranger can read in one sitting. Folders stay about this size too.
+MAX_MODULE_LINES = 400
+MAX_MODULES_PER_FOLDER = 17  # "about 15" (issue 36); cli/ sits at 17: one command per module
+
+
+def test_no_module_over_the_size_rule() -> None:
+    too_long = {str(p.relative_to(PACKAGE)): n for p in PACKAGE.rglob("*.py")
+                if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert not too_long, f"modules over {MAX_MODULE_LINES} lines (split them by concern): {too_long}"
+
+
+def test_no_folder_over_the_size_rule() -> None:
+    crowded = {str(d.relative_to(PACKAGE.parent)): n for d in [PACKAGE, *PACKAGE.rglob("*")] if d.is_dir()
+               if (n := len(list(d.glob("*.py")))) > MAX_MODULES_PER_FOLDER}
+    assert not crowded, f"folders over {MAX_MODULES_PER_FOLDER} modules (group them in subpackages): {crowded}"
