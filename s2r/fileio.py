@@ -29,6 +29,7 @@ __all__ = [
     "atomic_write_text",
     "check_output_dir",
     "check_output_free",
+    "discard_on_failure",
     "npy_bytes",
     "prepare_output_dir",
     "read_file_head",
@@ -39,8 +40,17 @@ __all__ = [
     "sha256_file",
 ]
 
-#: Folders created by this process, one list per active :func:`removing_new_folders_on_failure` block.
-_NEW_FOLDERS: list[list[Path]] = []
+class _FailureUndo:
+    """What one :func:`removing_new_folders_on_failure` block undoes on failure, or finishes on success."""
+
+    def __init__(self) -> None:
+        self.made: list[Path] = []  # new folders: removed when still empty
+        self.trees: list[Path] = []  # folders this run created and filled (a cache): removed whole
+        self.replaced: list[tuple[Path, Path]] = []  # (output folder, the old one moved aside beside it)
+
+
+#: One entry per active :func:`removing_new_folders_on_failure` block, innermost last.
+_NEW_FOLDERS: list[_FailureUndo] = []
 
 
 @contextlib.contextmanager
@@ -48,18 +58,48 @@ def removing_new_folders_on_failure() -> Iterator[None]:
     """Within the block, output folders created here (:func:`prepare_output_dir`, an :class:`OutputBatch`'s
     subfolders) are remembered; when the block ends with an exception (bad input found after ``-o DIR`` was
     prepared, Ctrl-C, SIGTERM), those still empty are removed again, deepest first, so a refused run leaves
-    nothing behind and its rerun is not refused. The CLI runs every command inside one."""
-    made: list[Path] = []
-    _NEW_FOLDERS.append(made)
+    nothing behind and its rerun is not refused; folders given to :func:`discard_on_failure` are removed whole.
+    An output folder replaced with ``--force`` (:func:`prepare_output_dir`) is restored: the new one is removed
+    and the old one moved back; when the block ends normally the old one is removed. The CLI runs every command
+    inside one."""
+    undo = _FailureUndo()
+    _NEW_FOLDERS.append(undo)
     try:
         yield
     except BaseException:
-        for folder in reversed(made):
+        for tree in reversed(undo.trees):
+            _remove_tree(tree)
+        for folder in reversed(undo.made):
             with contextlib.suppress(OSError):
                 folder.rmdir()  # only an empty folder: published files keep theirs
+        for out, old in reversed(undo.replaced):
+            _remove_tree(out)
+            with contextlib.suppress(OSError):
+                os.rename(old, out)
         raise
+    else:
+        for _, old in undo.replaced:
+            _remove_tree(old)
     finally:
-        _NEW_FOLDERS.remove(made)
+        _NEW_FOLDERS.remove(undo)
+
+
+def discard_on_failure(folder: str | Path) -> None:
+    """Remove ``folder`` whole (it must be one this run creates, such as a cache) if the enclosing
+    :func:`removing_new_folders_on_failure` block fails: a failed run leaves nothing it created."""
+    if _NEW_FOLDERS:
+        _NEW_FOLDERS[-1].trees.append(Path(folder))
+
+
+def _remove_tree(path: Path) -> None:
+    """Remove ``path`` and everything below it (a link is removed, never followed); quiet when it is gone."""
+    import shutil
+
+    with contextlib.suppress(OSError):
+        if path.is_symlink() or not path.is_dir():
+            path.unlink()
+        else:
+            shutil.rmtree(path)
 
 
 def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
@@ -68,7 +108,7 @@ def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
     missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
     folder.mkdir(parents=True, exist_ok=exist_ok)
     if _NEW_FOLDERS:
-        _NEW_FOLDERS[-1].extend(reversed(missing))
+        _NEW_FOLDERS[-1].made.extend(reversed(missing))
 
 
 def _lstat(path: Path) -> os.stat_result | None:
@@ -400,14 +440,25 @@ def check_output_dir(path: str | Path, *, force: bool) -> Path:
     return out
 
 
-def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
+def prepare_output_dir(path: str | Path, *, force: bool, replace: bool = True) -> Path:
     """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable.
 
     Without ``force`` a folder that did not exist is created exclusively: when another run creates it between
-    the check and the ``mkdir``, this one stops instead of sharing it.
+    the check and the ``mkdir``, this one stops instead of sharing it. With ``force`` (and ``replace``) a folder
+    that holds anything is REPLACED whole, never merged with (an old frame or bag file would stay beside the new
+    ones): it is moved aside (renamed to a ``.s2r-tmp-`` name beside it, the same filesystem) and a new empty
+    folder takes its name; inside a :func:`removing_new_folders_on_failure` block (every CLI command) the old
+    one is removed only when the command has succeeded, and moved back when it fails; outside a block it is
+    removed at once. The working folder, the home folder or a filesystem root is never replaced.
+    ``replace=False`` writes named files into an existing folder that s2r does not own (``force`` then only
+    lets them be overwritten).
     """
     out = check_output_dir(path, force=force)
-    existed = _lstat(out) is not None
+    st = _lstat(out)
+    if force and replace and st is not None and any(out.iterdir()):
+        _move_aside(out)
+        st = None
+    existed = st is not None
     try:
         _make_folders(out.parent)
         _make_folders(out, exist_ok=force or existed)
@@ -419,6 +470,33 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
     if not os.access(out, os.W_OK):
         raise S2RError("folder is not writable", path=out, hint="choose a writable location")
     return out
+
+
+def _move_aside(out: Path) -> None:
+    """Rename the output folder ``out`` to a new ``.s2r-tmp-NAME.*.old`` folder beside it (see
+    :func:`prepare_output_dir`); refuse one whose removal would take more than an output with it."""
+    import tempfile
+
+    resolved = out.resolve()
+    guarded = {Path.home().resolve(), Path.cwd().resolve()}
+    if resolved in guarded or resolved == Path(resolved.anchor) or resolved in Path.cwd().resolve().parents:
+        raise OutputExistsError("is the working folder, the home folder, a parent of the working folder or a "
+                                "filesystem root: --force would replace it whole; nothing was written", path=out,
+                                hint="give a folder of its own to the output, e.g. -o out/depth")
+    old = ""
+    try:
+        old = tempfile.mkdtemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".old", dir=out.parent)
+        os.rename(out, old)  # onto the new empty folder: one atomic rename
+    except OSError as exc:
+        if old:
+            with contextlib.suppress(OSError):
+                os.rmdir(old)
+        raise S2RError(f"cannot replace the output folder: {exc.strerror}; nothing was changed", path=out,
+                       hint="check the permissions of its parent folder") from None
+    if _NEW_FOLDERS:
+        _NEW_FOLDERS[-1].replaced.append((out, Path(old)))
+    else:
+        _remove_tree(Path(old))
 
 
 def npy_bytes(array: Any) -> bytes:

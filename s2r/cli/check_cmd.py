@@ -242,6 +242,10 @@ def _fleet_output(args: argparse.Namespace) -> Any:
     out = Path(args.output)
     if not args.resume:  # the folder is made when the first robot finishes (none for a cluster never reached)
         check_output_dir(out, force=args.force)
+        if out.is_dir() and any(out.iterdir()):  # --force: replaced whole (an old robot's folder must not stay)
+            from s2r.fileio import prepare_output_dir
+
+            prepare_output_dir(out, force=args.force)
         Journal(out).remove()
         return Journal(out)
     journal = Journal(out)
