@@ -14,7 +14,7 @@ import contextlib
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from s2r.depth.stream import DepthFrame, frame_ids
 from s2r.depth.writers.base import StreamWriter
@@ -22,7 +22,15 @@ from s2r.depth.writers.ros_messages import DEPTH_ENCODINGS, RosMessages
 from s2r.errors import DepthError, S2RError
 from s2r.fileio import TEMP_PREFIX, OutputBatch, check_output_dir, check_output_free, prepare_output_dir
 
-__all__ = ["RosBagWriter", "topic_names"]
+__all__ = ["ROS2_METADATA_VERSION", "RosBagWriter", "topic_names"]
+
+#: metadata.yaml version of ROS 2 bags: 8 (Iron's), which every supported distro reads. Jazzy writes 9, where
+#: ``offered_qos_profiles`` became a YAML list; Humble's rosbag2 (0.15, which writes 5) parses that field as a
+#: string and stops with "yaml-cpp: bad conversion" (ros2/rosbag2#2013). Version 8 keeps it a string of the
+#: integer-valued policies Humble writes, and the keys Humble does not know (``type_description_hash``,
+#: ``custom_data``, ``ros_distro``) are ignored by its reader; Jazzy reads every version up to 9. rosbags writes
+#: only 8 or 9.
+ROS2_METADATA_VERSION: Final = 8
 
 #: ROS 1 Noetic has no tf2_msgs in rosbags' store: its definition, registered on the ROS 1 typestore.
 _TF_MESSAGE_ROS1 = "geometry_msgs/TransformStamped[] transforms\n"
@@ -102,7 +110,7 @@ class RosBagWriter(StreamWriter):
         zero = QosTime(sec=0, nsec=0)
         latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero, zero,
                       QosLiveliness.AUTOMATIC, zero, False)
-        self._writer = Writer2(self._bag_path, version=9, storage_plugin=StoragePlugin.MCAP)
+        self._writer = Writer2(self._bag_path, version=ROS2_METADATA_VERSION, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
         for key, topic in topics.items():
             self._connections[key] = self._writer.add_connection(
