@@ -21,7 +21,8 @@ class StereoFrame:
             thin it (so outputs can be traced back to the input).
         name: a file-name-safe stem naming the frame: the left image's file stem for files, the left stamp in
             nanoseconds for bags (``1700000000123456789``), ``frame_000123`` for videos.
-        stamp_ns: the left image's time in nanoseconds: the header stamp for bags, frame index / fps for videos,
+        stamp_ns: the left image's time in nanoseconds: the header stamp for bags, the video's start plus the
+            frame's time in it for videos (:mod:`s2r.recordings.video`),
             None for still files.
         frame_id: the left image's ROS frame_id as recorded ('' when the input has none).
         left: left image, uint8, H x W (grey) or H x W x 3 (BGR).
