@@ -35,6 +35,8 @@ class BagFrames:
 
     def __post_init__(self) -> None:
         self.bag = Path(self.bag)
+        #: Messages without a partner within ``max_dt_s`` (``TOPIC @ STAMP ns``), skipped; filled as frames are read.
+        self.skipped: list[str] = []
         reader = self._open()
         reader.close()
 
@@ -73,8 +75,10 @@ class BagFrames:
         on their sha256); a bag failing while read raises the rule's error."""
         reader = self._open()
         kept = 0
+        self.skipped = []
         try:
-            pairs = paired_messages(reader, self.left_topic, self.right_topic, max_dt_s=self.max_dt_s)
+            pairs = paired_messages(reader, self.left_topic, self.right_topic, max_dt_s=self.max_dt_s,
+                                    unpaired=self.skipped)
             for index, (left, right) in enumerate(_guarded(pairs, self.bag, self.rule.error)):
                 if index % self.every:
                     continue

@@ -67,6 +67,11 @@ class FileFrames:
                                   hint="give each left image a right partner with the same number")
         return pairs
 
+    @property
+    def skipped(self) -> list[str]:
+        """Image files without a partner (skipped), as found when this source was made."""
+        return [str(p) for p in self.pairs.unpaired]
+
     def __len__(self) -> int:
         """Pairs this source yields (after ``every`` and ``max_frames``)."""
         n = len(range(0, len(self.pairs.names), self.every))

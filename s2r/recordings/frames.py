@@ -9,7 +9,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FrameSource", "StereoFrame"]
+__all__ = ["FrameSource", "StereoFrame", "skipped_inputs"]
 
 
 @dataclass(frozen=True)
@@ -50,3 +50,9 @@ class FrameSource(Protocol):
     def describe(self) -> str:
         """One line naming the recording for summaries (``folder rec/ (24 pairs)``, ``bag run.bag``)."""
         ...
+
+
+def skipped_inputs(source: object) -> list[str]:
+    """The inputs ``source`` skipped for want of a partner (image files, ``TOPIC @ STAMP ns`` bag messages), as
+    its ``skipped`` attribute lists them once it has been read; [] for a source that skips none."""
+    return list(getattr(source, "skipped", ()))
