@@ -168,8 +168,11 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
 
 
 def _noting(frames: Iterator[DepthFrame], seen: dict[str, Any]) -> Iterator[DepthFrame]:
-    """``frames`` unchanged, noting the first frame's frame_id and whether any stamp was synthesized."""
+    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame) and whether
+    any stamp was synthesized."""
+    from s2r.depth.stream import rectified_frame_id
+
     for frame in frames:
-        seen.setdefault("frame_id", frame.frame_id)
+        seen.setdefault("frame_id", rectified_frame_id(frame.frame_id))
         seen["synthesized"] = seen.get("synthesized", False) or frame.stamp_synthesized
         yield frame

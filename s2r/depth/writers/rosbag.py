@@ -5,7 +5,8 @@ The bag is written in a private temporary folder beside OUT (``.s2r-tmp-*``, sam
 leaves no half bag, and an existing OUT is replaced only with ``--force`` (never a link or a special file).
 
 Topics under the namespace (default ``/stereo``) as :mod:`.ros_messages` lists them; ``/tf_static`` is written
-once, latched (ROS 1) or with transient-local durability (ROS 2), at the first frame's stamp.
+once, latched (ROS 1) or with transient-local durability (ROS 2), at the first frame's stamp: the right optical
+frame and the rectified left frame every message is labelled with, both in the left optical frame.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Final
 
-from s2r.depth.stream import DepthFrame, frame_ids
+from s2r.depth.stream import DepthFrame, frame_ids, rectified_frame_id
 from s2r.depth.writers.base import StreamWriter
 from s2r.depth.writers.ros_messages import DEPTH_ENCODINGS, RosMessages
 from s2r.errors import DepthError, S2RError
@@ -124,13 +125,15 @@ class RosBagWriter(StreamWriter):
                            hint="free some space or choose a writable location") from None
 
     def write(self, frame: DepthFrame) -> None:
+        rect_frame = rectified_frame_id(frame.frame_id)
         if self._writer is None:
             self._open(frame)
             left, right = frame_ids(frame.frame_id, self.pipeline.profile.right.frame_id, "", "")
-            self._put("tf", frame.stamp_ns, self._messages.tf_static(frame.stamp_ns, self.pipeline.profile, left,
-                                                                     right))
+            self._put("tf", frame.stamp_ns, self._messages.tf_static(
+                frame.stamp_ns, self.pipeline.profile, left, right, rect_frame=rect_frame,
+                R1=self.rectification(frame).R1))
         m, rect, stamp, r = self._messages, self.rectification(frame), frame.stamp_ns, frame.result
-        header = m.header(stamp, frame.frame_id, seq=self.frames)
+        header = m.header(stamp, rect_frame, seq=self.frames)
         config = self.pipeline.geometry_for(rect.image_size).config
         encoding = "bgr8" if r.rect_left.ndim == 3 else "mono8"
         self._put("image", stamp, m.image(header, r.rect_left, encoding))
