@@ -145,7 +145,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     seen: dict[str, Any] = {}
     with open_writer(args.to, args.output, pipeline, force=args.force, options=options) as writer:
         frames, described, source = _frames(args, pipeline)
-        stream = _noting(pipeline.stream(frames, workers=args.workers, depth_range_m=depth_range), seen)
+        stream = _noting(pipeline.stream(frames, workers=args.jobs, depth_range_m=depth_range), seen)
         count = write_stream(writer, stream, progress=ProgressBar(enabled=None if not args.quiet else False))
         published = writer.publish()
     skipped = skipped_inputs(source)
