@@ -115,11 +115,7 @@ def _refuse_reversed(args: argparse.Namespace) -> None:
 def _source(args: argparse.Namespace) -> Any:
     from s2r.drift.source import StereoSource
 
-    spec = spec_from_args(args, max_frames=False).check(error=CheckError)
-    return StereoSource(folder=spec.folder, left_glob=spec.left_glob, right_glob=spec.right_glob, bag=spec.bag,
-                        left_topic=spec.left_topic, right_topic=spec.right_topic, max_frames=args.max_frames,
-                        video=spec.video, layout=spec.layout, left_video=spec.left_video, right_video=spec.right_video,
-                        every=spec.every, max_dt_s=spec.max_dt_s)
+    return StereoSource(spec_from_args(args, max_frames=False).check(error=CheckError), max_frames=args.max_frames)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from s2r.errors import S2RError
 from s2r.imageio import native_stderr_silenced
 from s2r.recordings.decode import SizeRule, to_uint8
-from s2r.recordings.frames import StereoFrame
+from s2r.recordings.frames import StereoFrame, thinned
 
 __all__ = ["LAYOUTS", "TwoVideoFrames", "VideoFrames"]
 
@@ -124,6 +124,14 @@ class _Capture:
         self.cap.release()
 
 
+def _grabbed(cap: _Capture) -> Iterator[int]:
+    """Grab the video's frames one at a time (not converted), yielding each one's index."""
+    index = 0
+    while cap.grab(index):
+        yield index
+        index += 1
+
+
 def _halves(frame: NDArray[Any], layout: str) -> tuple[NDArray[Any], NDArray[Any]]:
     if layout == "sbs":
         half = frame.shape[1] // 2
@@ -176,16 +184,11 @@ class VideoFrames:
         """Decoded frames split into left and right, one at a time."""
         cap = self._open()
         try:
-            index = kept = 0
-            while (self.max_frames is None or kept < self.max_frames) and cap.grab(index):
-                if index % self.every == 0:
-                    left, right = _halves(cap.retrieve(index), self.layout)
-                    kept += 1
-                    yield StereoFrame(index=index, name=f"frame_{index:06d}",
-                                      stamp_ns=cap.stamp_ns(index, self.start_ns), frame_id="",
-                                      left=to_uint8(left, grey=self.grey), right=to_uint8(right, grey=self.grey),
-                                      source=f"video {self.video} frame {index}")
-                index += 1
+            for index, _ in thinned(_grabbed(cap), self.every, self.max_frames):
+                left, right = _halves(cap.retrieve(index), self.layout)
+                yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=cap.stamp_ns(index, self.start_ns),
+                                  frame_id="", left=to_uint8(left, grey=self.grey),
+                                  right=to_uint8(right, grey=self.grey), source=f"video {self.video} frame {index}")
         finally:
             cap.release()
 
@@ -238,22 +241,24 @@ class TwoVideoFrames:
         """Decoded frame pairs, one at a time; a video ending before the other is refused."""
         left, right = self._open()
         try:
-            index = kept = 0
-            while self.max_frames is None or kept < self.max_frames:
-                more_left, more_right = left.grab(index), right.grab(index)
-                if more_left != more_right:
-                    short, other = ("left", "right") if more_right else ("right", "left")
-                    raise self._mismatch(f"the {short} video ends after {index} frames but the {other} one has more")
-                if not more_left:
-                    return
-                if index % self.every == 0:
-                    kept += 1
-                    yield StereoFrame(index=index, name=f"frame_{index:06d}",
-                                      stamp_ns=left.stamp_ns(index, self.start_ns),
-                                      frame_id="", left=to_uint8(left.retrieve(index), grey=self.grey),
-                                      right=to_uint8(right.retrieve(index), grey=self.grey),
-                                      source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}")
-                index += 1
+            for index, _ in thinned(self._grabbed_pairs(left, right), self.every, self.max_frames):
+                yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=left.stamp_ns(index, self.start_ns),
+                                  frame_id="", left=to_uint8(left.retrieve(index), grey=self.grey),
+                                  right=to_uint8(right.retrieve(index), grey=self.grey),
+                                  source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}")
         finally:
             left.release()
             right.release()
+
+    def _grabbed_pairs(self, left: _Capture, right: _Capture) -> Iterator[int]:
+        """Grab a frame of each video at a time, yielding its index; a video ending before the other is refused."""
+        index = 0
+        while True:
+            more_left, more_right = left.grab(index), right.grab(index)
+            if more_left != more_right:
+                short, other = ("left", "right") if more_right else ("right", "left")
+                raise self._mismatch(f"the {short} video ends after {index} frames but the {other} one has more")
+            if not more_left:
+                return
+            yield index
+            index += 1
