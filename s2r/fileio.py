@@ -32,6 +32,7 @@ __all__ = [
     "discard_on_failure",
     "npy_bytes",
     "prepare_output_dir",
+    "protect_inputs",
     "read_file_head",
     "read_npy",
     "read_regular_file",
@@ -472,6 +473,26 @@ def prepare_output_dir(path: str | Path, *, force: bool, replace: bool = True) -
     return out
 
 
+#: Paths the running command was given (its inputs, see :func:`protect_inputs`): a folder holding one is never
+#: replaced whole.
+_INPUTS: list[Path] = []
+
+
+def protect_inputs(paths: list[str | os.PathLike[str]]) -> None:
+    """Remember the paths a command was given (files, folders, the folder part of a glob): ``--force`` then never
+    replaces an output folder that holds one of them (``-o data --force`` with ``--left-dir data/left`` would
+    remove the recording). The CLI calls it with every path among a command's arguments."""
+    _INPUTS.clear()
+    for given in paths:
+        text = str(given)
+        parts = Path(text).parts
+        magic = next((k for k, part in enumerate(parts) if any(c in part for c in "*?[")), len(parts))
+        if magic < len(parts):  # a glob: its folder part
+            text = str(Path(*parts[:magic])) if magic else "."
+        if text and os.path.lexists(text):
+            _INPUTS.append(Path(text))
+
+
 def _move_aside(out: Path) -> None:
     """Rename the output folder ``out`` to a new ``.s2r-tmp-NAME.*.old`` folder beside it (see
     :func:`prepare_output_dir`); refuse one whose removal would take more than an output with it."""
@@ -483,6 +504,10 @@ def _move_aside(out: Path) -> None:
         raise OutputExistsError("is the working folder, the home folder, a parent of the working folder or a "
                                 "filesystem root: --force would replace it whole; nothing was written", path=out,
                                 hint="give a folder of its own to the output, e.g. -o out/depth")
+    held = next((p for p in _INPUTS if resolved in p.resolve().parents), None)
+    if held is not None:
+        raise OutputExistsError(f"holds {held}, an input of this command: --force would replace the folder whole; "
+                                "nothing was written", path=out, hint="write the output to a folder of its own")
     old = ""
     try:
         old = tempfile.mkdtemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".old", dir=out.parent)

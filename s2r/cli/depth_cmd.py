@@ -217,6 +217,8 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     if depth_range is not None:
         result, removed = limit_depth_range(result, *depth_range)
     rect = pipeline.geometry_for((left.shape[1], left.shape[0])).rectification
+    if args.force:  # replaced whole: no points.ply of an earlier --ply run stays beside the new files
+        prepare_output_dir(args.output, force=True)
     with OutputBatch(force=args.force, root=args.output) as batch:  # every file, or none
         written = write_outputs(args.output, result, ply=args.ply, batch=batch, colour_range_m=args.colour_range)
         written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"

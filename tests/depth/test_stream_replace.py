@@ -122,3 +122,30 @@ def test_failed_calibration_leaves_no_corner_cache(tmp_path: Path, capsys: pytes
                  "--jobs", "1"]) == 2
     assert "at least" in capsys.readouterr().err
     assert sorted(os.listdir(tmp_path)) == before  # no rig.yaml, no rig.yaml.corners/
+
+
+def test_force_never_replaces_a_folder_holding_an_input(known: dict[str, Any], tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    data = tmp_path / "data"
+    for side in ("left", "right"):
+        (data / side).mkdir(parents=True)
+        for p in (known["root"] / "rec" / side).iterdir():
+            (data / side / p.name).write_bytes(p.read_bytes())
+    before = _tree(data)
+    for inputs in (["--left-dir", str(data / "left"), "--right-dir", str(data / "right")],
+                   ["--left", str(data / "left" / "*.png"), "--right", str(data / "right" / "*.png")],
+                   [str(data / "left" / f"{known['names'][0]}.png"), str(data / "right" / f"{known['names'][0]}.png")]):
+        assert main(["depth", str(known["profile"]), *inputs, "-o", str(data), "--force"]) == 2
+        assert "an input of this command: --force would replace the folder whole" in capsys.readouterr().err
+        assert _tree(data) == before
+    _no_temporaries(tmp_path)
+
+
+def test_force_replaces_a_single_pair_output_whole(known: dict[str, Any], tmp_path: Path) -> None:
+    out = tmp_path / "pair"
+    left, right = (known["root"] / "rec" / side / f"{known['names'][0]}.png" for side in ("left", "right"))
+    assert main(["-q", "depth", str(known["profile"]), str(left), str(right), "-o", str(out), "--ply"]) == 0
+    assert (out / "points.ply").is_file()
+    assert main(["-q", "depth", str(known["profile"]), str(left), str(right), "-o", str(out), "--force"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["camera_info.yaml", "depth.png", "depth_color.png",
+                                                     "disparity.npy"]
