@@ -28,8 +28,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from s2r.calib.detect import Detection
-from s2r.calib.solve.cvsolve import DISTORTION_CHOICES
-from s2r.calib.solve.stereo import calibrate_stereo_detections
+from s2r.calib.solve.pipelines.stereo import calibrate_stereo_detections
+from s2r.calib.solve.solvers.cvsolve import DISTORTION_CHOICES
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 
 Row = dict[str, Any]

@@ -30,8 +30,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from s2r.calib.solve.cvsolve import DISTORTION_CHOICES
-from s2r.calib.solve.stereo import calibrate_stereo
+from s2r.calib.solve.pipelines.stereo import calibrate_stereo
+from s2r.calib.solve.solvers.cvsolve import DISTORTION_CHOICES
 from tests.calib.image_rig import PATTERN, SQUARE_M, ImageRig, errors, make_image_rig, render_rig, sigma_ratios
 
 Row = dict[str, Any]

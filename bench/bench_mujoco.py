@@ -19,10 +19,10 @@ from scipy.spatial import cKDTree
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from s2r.lens.distortion import project_points
 from s2r.render import render_board_set
 from s2r.render.backend import RendererChoice
-from s2r.render.distortion import project_points
-from s2r.sources.mujoco_export import export_mujoco
+from s2r.sources.export.mujoco import export_mujoco
 from tests.render import mujoco_direct as md
 from tests.render._helpers import detect
 from tests.render.test_mujoco import _rig
@@ -85,7 +85,7 @@ def _direct(rig: object, tmp: Path) -> tuple[np.ndarray, float]:
 
 
 def main() -> None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     reason = gl_unavailable_reason()
     if reason is not None:

@@ -18,9 +18,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from s2r.render.boards import board_surface, render_board_set
+from s2r.render.boards.poses import BoardGeometry, sample_board_poses
+from s2r.render.boards.sets import board_surface, render_board_set
 from s2r.render.camera import PinholeView, render_pinhole
-from s2r.render.poses import BoardGeometry, sample_board_poses
 from s2r.render.rig import StereoJob, render_stereo_images, stereo_setups
 from s2r.render.sensor import capture, prepared
 from s2r.render.world import Surface, set_world

@@ -32,7 +32,7 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from s2r.calib.solve.target_stereo import calibrate_stereo_target
+from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target
 from s2r.targets import target_from_mapping
 from tests import raycast as rc
 

@@ -35,7 +35,7 @@ from s2r.calib import calibrate_stereo
 from s2r.depth.pipeline import StereoPipeline
 from s2r.profile import StereoProfile
 from s2r.registry import load_profile
-from s2r.render.boards import render_board_set
+from s2r.render.boards.sets import render_board_set
 from s2r.render.scenes import render_scene
 from s2r.validate.run import FULL, QUICK, Settings, validate
 

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, SimulationSettings, StereoProfile
 
 # MuJoCo picks its GL platform when first imported: headless test runs render through EGL whichever test imports it
-# first (s2r.render._mujoco chooses the same, but only when it is the first importer).
+# first (s2r.render.mujoco.backend chooses the same, but only when it is the first importer).
 if not os.environ.get("DISPLAY"):
     import ctypes.util
 

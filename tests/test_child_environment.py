@@ -83,7 +83,8 @@ def test_a_plain_child_of_a_cv2_process_does_search_the_current_folder(tmp_path:
 
 def test_the_mujoco_probe_does_not_search_the_current_folder(tmp_path: Path) -> None:
     pytest.importorskip("mujoco", reason="the mujoco extra is not installed")
-    trace = _loader_trace(tmp_path, _after_cv2("from s2r.render._mujoco import _probe\n_probe('no-such-platform')"))
+    probe = "from s2r.render.mujoco.backend import _probe\n_probe('no-such-platform')"
+    trace = _loader_trace(tmp_path, _after_cv2(probe))
     assert _RELATIVE_TRY not in trace
 
 

@@ -214,8 +214,8 @@ def _real_file(tmp_path: Path) -> Path:
 
 def test_a_mujoco_sim_gets_mjcf_edits_not_gazebo_ones(tmp_path: Path) -> None:
     from s2r.sources.profile_builder import load_description_profile
-    from s2r.validate.advice_mujoco import suggest_mujoco_edits
-    from s2r.validate.params import parameter_table
+    from s2r.validate.advice.mujoco import suggest_mujoco_edits
+    from s2r.validate.measures.params import parameter_table
     from s2r.validate.tolerances import Tolerances
 
     (tmp_path / "rig.xml").write_text(_MJCF_RIG)

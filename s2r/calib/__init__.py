@@ -11,16 +11,17 @@ load the solver, so ``s2r calibrate`` can start detecting while the solver's mod
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from s2r.lazy import lazy_names
 
 if TYPE_CHECKING:
     from s2r.calib.detect import CornerCache, Detection, detect_board
     from s2r.calib.detect.coverage import Coverage, PoseSpread
     from s2r.calib.detect.inputs import PairSet, find_mono_images, find_stereo_pairs
-    from s2r.calib.solve.mono import MonoCalibration, calibrate_mono
-    from s2r.calib.solve.stereo import StereoCalibration, ViewError, calibrate_stereo
-    from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+    from s2r.calib.solve.pipelines.mono import MonoCalibration, calibrate_mono
+    from s2r.calib.solve.pipelines.stereo import StereoCalibration, ViewError, calibrate_stereo
+    from s2r.calib.solve.pipelines.stereo_bag import calibrate_stereo_bag
     from s2r.calib.solve.views import MAX_SOLVE_VIEWS, MIN_VIEWS, match_corner_order
 
 #: Public name -> the module that defines it.
@@ -29,9 +30,10 @@ _HOMES = {
     "Coverage": "s2r.calib.detect.coverage", "PoseSpread": "s2r.calib.detect.coverage",
     "PairSet": "s2r.calib.detect.inputs", "find_mono_images": "s2r.calib.detect.inputs",
     "find_stereo_pairs": "s2r.calib.detect.inputs",
-    "MonoCalibration": "s2r.calib.solve.mono", "calibrate_mono": "s2r.calib.solve.mono",
-    "StereoCalibration": "s2r.calib.solve.stereo", "ViewError": "s2r.calib.solve.stereo",
-    "calibrate_stereo": "s2r.calib.solve.stereo", "calibrate_stereo_bag": "s2r.calib.solve.stereo_bag",
+    "MonoCalibration": "s2r.calib.solve.pipelines.mono", "calibrate_mono": "s2r.calib.solve.pipelines.mono",
+    "StereoCalibration": "s2r.calib.solve.pipelines.stereo", "ViewError": "s2r.calib.solve.pipelines.stereo",
+    "calibrate_stereo": "s2r.calib.solve.pipelines.stereo",
+    "calibrate_stereo_bag": "s2r.calib.solve.pipelines.stereo_bag",
     "MAX_SOLVE_VIEWS": "s2r.calib.solve.views", "MIN_VIEWS": "s2r.calib.solve.views",
     "match_corner_order": "s2r.calib.solve.views",
 }
@@ -40,15 +42,4 @@ __all__ = ["MAX_SOLVE_VIEWS", "MIN_VIEWS", "CornerCache", "Coverage", "Detection
            "PoseSpread", "StereoCalibration", "ViewError", "calibrate_mono", "calibrate_stereo", "calibrate_stereo_bag",
            "detect_board", "find_mono_images", "find_stereo_pairs", "match_corner_order"]
 
-
-def __getattr__(name: str) -> Any:
-    """Load a public name's module on first use."""
-    if name not in _HOMES:
-        raise AttributeError(f"module 's2r.calib' has no attribute {name!r}")
-    value = getattr(importlib.import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOMES])
+__getattr__, __dir__ = lazy_names(__name__, _HOMES, globals())

@@ -16,7 +16,7 @@ from s2r.limits import MAX_SQUARE_M
 __all__ = ["register"]
 
 EXIT_OK = 0
-#: s2r.calib.solve.lens.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
+#: s2r.lens.models.DEFAULT_LENS (repeated so the CLI does not import the solver at start-up).
 DEFAULT_LENS = "k1k2p1p2"
 
 
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = _solve(args, pattern, lens, target, common)
     except CalibrationError as exc:
-        from s2r.calib.solve.rig import SwappedCamerasError
+        from s2r.calib.solve.solvers.rig import SwappedCamerasError
 
         if not isinstance(exc, SwappedCamerasError) or not args.swap:
             raise
@@ -198,7 +198,7 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
     if spec.kind == "bag" and not _plain_bag(spec):
         return _run_stream(args, spec, kw)  # a librealsense recording: its IR pair, found without topics
     if spec.kind == "bag":
-        from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+        from s2r.calib.solve.pipelines.stereo_bag import calibrate_stereo_bag
 
         return calibrate_stereo_bag(args.bag, left_topic=args.left_topic, right_topic=args.right_topic,
                                     max_dt_s=args.max_dt, every=args.every, max_frames=args.max_frames,
@@ -213,7 +213,7 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
 
         check_board_size(pairs.left, pattern)  # a wrong --pattern named in a second, before the full search
     else:
-        from s2r.calib.solve.target_stereo import calibrate_stereo_target
+        from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target
 
         kw.pop("pattern")
         return calibrate_stereo_target(pairs.left, pairs.right, names=pairs.names, unpaired=pairs.unpaired,
@@ -224,7 +224,7 @@ def _solve(args: argparse.Namespace, pattern: Any, lens: str, target: Any, commo
                               swap=args.swap, pattern=pattern, jobs=args.jobs, cache_dir=common["cache_dir"],
                               progress=common["progress"])
     try:  # the workers detect while the solver loads (about 0.2 s of a first run)
-        from s2r.calib.solve.stereo import calibrate_detected_pairs
+        from s2r.calib.solve.pipelines.stereo import calibrate_detected_pairs
     except BaseException:
         detection.cancel()
         raise
@@ -250,7 +250,7 @@ def _thinned(pairs: Any, args: argparse.Namespace) -> Any:
 
 def _run_stream(args: argparse.Namespace, spec: Any, kw: dict[str, Any]) -> Any:
     """Calibrate from a video (or two): frames streamed, blurred ones and still repeats counted, not kept."""
-    from s2r.calib.solve.stereo_stream import calibrate_stereo_stream
+    from s2r.calib.solve.pipelines.stereo_stream import calibrate_stereo_stream
     from s2r.fileio import sha256_file
     from s2r.profile import SourceFile
     from s2r.recordings import open_recording
@@ -273,11 +273,11 @@ def _run_mono(args: argparse.Namespace, target: Any, lens: str, common: dict[str
     images = images[:None if args.max_frames is None else args.max_frames * args.every:args.every]
     if target is None:
         from s2r.calib.detect.board_size import check_board_size
-        from s2r.calib.solve.mono import calibrate_mono
+        from s2r.calib.solve.pipelines.mono import calibrate_mono
 
         check_board_size(images, common["pattern"])
         return calibrate_mono(images, **common)
-    from s2r.calib.solve.target_mono import calibrate_mono_target
+    from s2r.calib.solve.pipelines.target_mono import calibrate_mono_target
 
     kw = {k: v for k, v in common.items() if k not in ("pattern", "square_m")}
     kw.update(target=target, lens=lens,

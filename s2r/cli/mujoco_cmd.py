@@ -33,7 +33,7 @@ def register(profile_sub: Any) -> None:
 
 
 def _cmd_export_mujoco(args: argparse.Namespace) -> int:
-    from s2r.sources.mujoco_export import export_mujoco
+    from s2r.sources.export.mujoco import export_mujoco
 
     check_output_free(args.output, force=args.force)
     profile = load_profile(args.profile)

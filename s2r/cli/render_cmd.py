@@ -20,7 +20,7 @@ from s2r.errors import RenderError
 from s2r.fileio import atomic_write_text, read_text_file
 
 if TYPE_CHECKING:
-    from s2r.sensor_model import SensorModel
+    from s2r.sensor.model import SensorModel
 
 __all__ = ["RENDERER_CHOICES", "SCENE_CHOICES", "add_renderer", "register", "renderer_choice"]
 

@@ -28,8 +28,8 @@ from s2r.fileio import check_output_free
 
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
-    from s2r.sensor_fit.depth import DepthFrame
-    from s2r.sensor_fit.images import BoardImage
+    from s2r.sensor.fit.depth import DepthFrame
+    from s2r.sensor.fit.images import BoardImage
 
 __all__ = ["register"]
 
@@ -120,7 +120,7 @@ def _recording(args: argparse.Namespace, profile: StereoProfile, *, grey: bool) 
 def _raw_images(args: argparse.Namespace, profile: StereoProfile) -> list[BoardImage]:
     """The raw grey images of the recording's cameras (left, and right for stereo) with their boards."""
     from s2r.quality.inputs import IMAGE_SUFFIXES, list_files, read_grey
-    from s2r.sensor_fit import board_image
+    from s2r.sensor.fit import board_image
 
     found = []
     if _stereo(args):
@@ -136,7 +136,7 @@ def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[li
     from s2r.depth.pipeline import StereoPipeline
     from s2r.quality.run import measure_board_views
     from s2r.quality.views import frame_views, stereo_fb, stereo_visible_m
-    from s2r.sensor_fit import stereo_depth_frames
+    from s2r.sensor.fit import stereo_depth_frames
 
     pipeline = StereoPipeline(profile, preset=args.preset)
     views = frame_views(pipeline, _recording(args, profile, grey=False))
@@ -148,7 +148,7 @@ def _stereo_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[li
 def _device_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[list[DepthFrame], list[BoardImage]]:
     from s2r.quality.inputs import DEPTH_SUFFIXES, IMAGE_SUFFIXES, list_files, pair_files
     from s2r.quality.views import bag_device_views, device_fb, device_views
-    from s2r.sensor_fit import fit_device_depth
+    from s2r.sensor.fit import fit_device_depth
 
     if args.bag is not None:
         views = bag_device_views(profile, args.bag, args.left_topic, args.depth_topic, max_dt_s=args.max_dt,
@@ -166,7 +166,7 @@ def _device_frames(args: argparse.Namespace, profile: StereoProfile) -> tuple[li
 def _cmd_fit(args: argparse.Namespace) -> int:
     from s2r.formats.s2r_yaml import dump_profile
     from s2r.sensor.files import dump_sensor_model
-    from s2r.sensor_fit import fit_model
+    from s2r.sensor.fit import fit_model
 
     _check_fit_args(args)
     profile = load_profile(profile_argument(args, command="sensor fit"))
@@ -219,7 +219,7 @@ def _cmd_apply(args: argparse.Namespace) -> int:
     from s2r.quality.views import device_fb
     from s2r.sensor.depth_files import check_depth_sizes
     from s2r.sensor.files import load_sensor_model
-    from s2r.sensor_fit.apply_files import apply_to_files
+    from s2r.sensor.fit.apply_files import apply_to_files
 
     if args.seed < 0:
         raise DepthError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")

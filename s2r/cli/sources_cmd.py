@@ -126,11 +126,11 @@ def _add_from_description(profile_sub: Any, command: str) -> None:
 
 
 def _cmd_lint(args: argparse.Namespace) -> int:
-    from s2r.sources.lint import lint_description
+    from s2r.sources.lint.rules import lint_description
 
     info = None
     if args.camera_info is not None:
-        from s2r.formats.ros import read_camera_info
+        from s2r.formats.ros_read import read_camera_info
 
         info = read_camera_info(args.camera_info)
     xacro_args = parse_xacro_args(args.xacro_args + args.xacro_more)
@@ -173,7 +173,7 @@ def _cmd_from_urdf(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from s2r.sources.gazebo_export import export_gazebo
+    from s2r.sources.export.gazebo import export_gazebo
 
     check_output_free(args.output, force=args.force)
     profile = load_profile(args.profile)

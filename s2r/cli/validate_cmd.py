@@ -127,7 +127,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             [p for p in (sim, real) if p is not None], settings.preset, settings.distances_m))
     recording = _recording(args, real is not None)
     if recording is not None and real is not None:  # every input opened and checked before the first render
-        from s2r.validate.recording import check_recording_opens
+        from s2r.validate.recording.compare import check_recording_opens
 
         check_recording_opens(real, recording.folder, option="--recording", preset=settings.preset)
         if recording.sim is not None:

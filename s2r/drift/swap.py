@@ -1,7 +1,7 @@
 """Swapped cameras, as ``s2r calibrate`` refuses them: the right camera found to the LEFT of the left one.
 
-Calibrate sees it in the board poses (:func:`s2r.calib.solve.rig.check_rig`); without a board the same fact shows
-in the matches: rectified with the profile, a swapped pair's matches lie behind the rig (negative disparity) or
+Calibrate sees it in the board poses (:func:`s2r.calib.solve.solvers.rig.check_rig`); without a board the same fact
+shows in the matches: rectified with the profile, a swapped pair's matches lie behind the rig (negative disparity) or
 need a large turn to line up. Each way the recording could have been mixed up is tried on the raw SIFT matches
 (no new detection: a 180-degree turn of an image moves a keypoint to ``(W - 1 - x, H - 1 - y)`` and SIFT is
 rotation invariant):

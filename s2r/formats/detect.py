@@ -18,9 +18,10 @@ from typing import Any, Literal
 from s2r.errors import FormatError
 from s2r.formats._common import first_document, read_text, read_yaml
 from s2r.formats.kalibr import is_kalibr_mapping, load_kalibr, strip_yaml_directive
-from s2r.formats.realsense import is_realsense_text, load_realsense
-from s2r.formats.realsense_recording import is_realsense_recording, load_realsense_recording
-from s2r.formats.ros import camera_info_from_filestorage, is_camera_info_mapping, load_ros_pair
+from s2r.formats.realsense.facts import is_realsense_recording
+from s2r.formats.realsense.recording import load_realsense_recording
+from s2r.formats.realsense.text import is_realsense_text, load_realsense
+from s2r.formats.ros_read import camera_info_from_filestorage, is_camera_info_mapping, load_ros_pair
 from s2r.formats.s2r_yaml import load_profile_file
 from s2r.formats.zed import is_zed_conf, load_zed
 from s2r.geometry import baseline_layout_problem

@@ -8,12 +8,9 @@ poor matcher reaches 1-2 px) and far below what mismatches produce (thousands of
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-if TYPE_CHECKING:
-    from s2r.quality.metrics import FrameQuality
-
-__all__ = ["MAX_PLANE_FIT_RMS_PCT", "MAX_SUBPIXEL_RMS_PX", "MAX_TEMPORAL_NOISE_PCT", "MAX_Z_ACCURACY_PCT",
+__all__ = ["MAX_PLANE_FIT_RMS_PCT", "MAX_SUBPIXEL_RMS_PX", "MAX_TEMPORAL_NOISE_PCT", "MAX_Z_ACCURACY_PCT", "Figures",
            "insane_reason", "measured", "sane_value"]
 
 #: Plane-fit RMS above this share of the distance (%) is no measurement of noise.
@@ -30,12 +27,32 @@ _LIMITS = (("plane_fit_rms_pct", "plane-fit RMS", MAX_PLANE_FIT_RMS_PCT, "%"),
            ("z_accuracy_pct", "Z accuracy", MAX_Z_ACCURACY_PCT, "%"))
 
 
+class Figures(Protocol):
+    """The figures of one frame these checks read: a :class:`~s2r.quality.metrics.FrameQuality` (which imports this
+    module, so it is named by its shape here)."""
+
+    @property
+    def distance_m(self) -> float | None: ...
+    @property
+    def z_accuracy_pct(self) -> float | None: ...
+    @property
+    def plane_fit_rms_pct(self) -> float | None: ...
+    @property
+    def subpixel_rms_px(self) -> float | None: ...
+    @property
+    def fill_rate_pct(self) -> float | None: ...
+    @property
+    def outlier_pct(self) -> float | None: ...
+    @property
+    def scored(self) -> bool: ...
+
+
 def sane_value(value: float | None, limit: float) -> bool:
     """True for None (not measured) or a finite value within ``±limit``."""
     return value is None or (math.isfinite(value) and abs(value) <= limit)
 
 
-def insane_reason(quality: FrameQuality) -> str:
+def insane_reason(quality: Figures) -> str:
     """Why ``quality``'s figures cannot be measurements ("" when they can): non-finite values, percentages
     outside 0-100, negative counts, or a figure beyond its limit above."""
     problems = []
@@ -53,6 +70,6 @@ def insane_reason(quality: FrameQuality) -> str:
     return "; ".join(problems)
 
 
-def measured(quality: FrameQuality) -> bool:
+def measured(quality: Figures) -> bool:
     """True when ``quality`` is scored and every figure of it can be a measurement: what summaries may use."""
     return quality.scored and not insane_reason(quality)

@@ -24,16 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import FormatError
-from s2r.formats.realsense_db3 import parse_key_values
-from s2r.formats.realsense_recording import (
-    DEPTH_STREAM,
-    LEFT_STREAM,
-    RIGHT_STREAM,
-    RecordingFacts,
-    StreamFacts,
-    open_messages,
-    read_recording,
-)
+from s2r.formats.realsense.db3 import parse_key_values
+from s2r.formats.realsense.facts import DEPTH_STREAM, LEFT_STREAM, RIGHT_STREAM, RecordingFacts, StreamFacts
+from s2r.formats.realsense.recording import open_messages, read_recording
 from s2r.imageio import _native_stderr_silenced, declared_size, oversize_reason
 from s2r.limits import MAX_IMAGE_PX, MIN_IMAGE_PX
 from s2r.recordings.frames import StereoFrame, thinned

@@ -154,7 +154,7 @@ def open_recording(spec: RecordingSpec | None = None, *, expected_size: Expected
 def _realsense(bag: Path, *, topics: bool) -> bool:
     """Whether ``bag`` is read as a librealsense recording: a bare SQLite file (no ROS 2 bag folder around it), or
     a ROS 1 bag given without topics."""
-    from s2r.formats.realsense_recording import BAG_MAGIC, SQLITE_MAGIC, file_head
+    from s2r.formats.realsense.facts import BAG_MAGIC, SQLITE_MAGIC, file_head
 
     if not bag.is_file() or (bag.parent / "metadata.yaml").is_file():
         return False
@@ -167,7 +167,7 @@ def _realsense(bag: Path, *, topics: bool) -> bool:
 
 def _open_realsense(bag: Path, rule: SizeRule, *, every: int, max_frames: int | None) -> FrameSource:
     """The IR pair of a librealsense recording, its camera_info sizes checked against ``rule`` before any frame."""
-    from s2r.formats.realsense_recording import LEFT_STREAM, RIGHT_STREAM
+    from s2r.formats.realsense.facts import LEFT_STREAM, RIGHT_STREAM
     from s2r.recordings.realsense import RealSenseFrames
 
     frames = RealSenseFrames(bag, every=every, max_frames=max_frames)

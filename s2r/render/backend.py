@@ -80,7 +80,7 @@ def check_renderer(choice: RendererChoice, *, probe_gl: bool = False) -> None:
     if choice.scene_camera is not None and choice.scene_path is None:
         raise RenderError("a scene camera needs a scene file", field="--world-camera", hint="add --world SCENE.xml")
     if choice.name == "mujoco":
-        from s2r.render._mujoco import check_scene
+        from s2r.render.mujoco.backend import check_scene
 
         # MuJoCo missing, no GL, a bad scene or camera: one line before any work
         check_scene(choice.scene_path, choice.scene_camera, probe_gl=probe_gl)
@@ -111,7 +111,7 @@ def get_backend(choice: RendererChoice | None = None) -> Backend:
         if any(pid != key[0] for pid, _ in _BACKENDS):
             _BACKENDS.clear()
         if choice.name == "mujoco":
-            from s2r.render._mujoco import MujocoBackend
+            from s2r.render.mujoco.backend import MujocoBackend
 
             _BACKENDS[key] = MujocoBackend(choice.scene_path, choice.scene_camera)
         elif choice.name == "pybullet":

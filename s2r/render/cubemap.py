@@ -33,9 +33,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
+from s2r.lens.distortion import distort_normalised, undistort_pixels
 from s2r.profile import Camera
 from s2r.render.camera import PinholeView
-from s2r.render.distortion import distort_normalised, undistort_pixels
 
 __all__ = ["FACE_ROTATIONS", "MARGIN_PX", "CubeMap", "lens_rays", "plan_cube_map"]
 

@@ -16,9 +16,9 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import RenderError
+from s2r.lens.distortion import undistort_pixels
 from s2r.profile import Camera, StereoProfile
 from s2r.render.cubemap import lens_rays
-from s2r.render.distortion import undistort_pixels
 from s2r.render.textures import speckle_texture, write_png
 from s2r.render.world import Surface, box_faces, write_mesh
 

@@ -6,24 +6,35 @@ pose follows the profile's OpenCV extrinsics, ``X_right = R X_left + T``, so ``T
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
-from s2r.profile import StereoProfile
+from s2r.profile import SimulationSettings, StereoProfile
 from s2r.render.backend import RendererChoice, get_backend
-from s2r.render.poses import clip_planes
 from s2r.render.sensor import CameraSetup, Capture, capture
 from s2r.render.world import Surface
 from s2r.sensor.images import degrade_image
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
-__all__ = ["MAX_RENDER_PIXELS", "StereoJob", "check_render_options", "check_render_size", "finish_image",
+__all__ = ["MAX_RENDER_PIXELS", "StereoJob", "check_render_options", "check_render_size", "clip_planes", "finish_image",
            "render_stereo", "render_stereo_images", "stereo_setups"]
 
 MAX_SUPERSAMPLE = 8
+
+
+@functools.lru_cache(maxsize=1)
+def _default_simulation() -> SimulationSettings:
+    return SimulationSettings()
+
+
+def clip_planes(profile: StereoProfile) -> tuple[float, float]:
+    """``(near, far)`` clip planes in metres: the profile's simulation settings or the defaults."""
+    sim = profile.simulation if profile.simulation is not None else _default_simulation()
+    return sim.clip_near_m, sim.clip_far_m
 
 
 def check_render_options(*, supersample: int, noise_sigma: float, right_gain: float = 1.0) -> None:

@@ -25,14 +25,15 @@ from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback
 from s2r.rectification import stereo_rectification
 from s2r.render.backend import RendererChoice, check_renderer, render_workers
-from s2r.render.boards import BORDER_SQUARES, board_surface
+from s2r.render.boards.poses import BoardGeometry
+from s2r.render.boards.sets import BORDER_SQUARES, board_surface
 from s2r.render.layouts import check_distances, scene_layouts
 from s2r.render.outputs import clear_numbered, encode_png, numbered_names, remove_stale_numbered
 from s2r.render.parallel import run_jobs
-from s2r.render.poses import BoardGeometry, clip_planes
 from s2r.render.rig import (
     StereoJob,
     check_render_options,
+    clip_planes,
     finish_image,
     render_stereo,
     render_stereo_images,
@@ -40,7 +41,7 @@ from s2r.render.rig import (
 )
 from s2r.render.sensor import Capture
 from s2r.render.world import Surface
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["SceneFrame", "render_boards_at", "render_scene", "write_scene"]
 

@@ -23,11 +23,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import RenderError
+from s2r.lens.distortion import is_pinhole, normalised_rays, undistort_pixels
 from s2r.profile import Camera
 from s2r.render.backend import Backend, get_backend
 from s2r.render.camera import PinholeView
 from s2r.render.cubemap import CubeMap, lens_rays, plan_cube_map
-from s2r.render.distortion import is_pinhole, normalised_rays, undistort_pixels
 
 __all__ = ["CameraSetup", "Capture", "capture", "prepared"]
 

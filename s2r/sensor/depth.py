@@ -1,5 +1,5 @@
 """Perfect depth (a simulator's) turned into a device's: dropout at depth edges, holes against distance, disparity
-noise and sub-pixel quantisation, as a :class:`~s2r.sensor_model.SensorModel` describes them. Seeded.
+noise and sub-pixel quantisation, as a :class:`~s2r.sensor.model.SensorModel` describes them. Seeded.
 
 Depth is (H, W) metres along the optical axis in the camera whose focal length ``f`` (px) and the rig's baseline
 ``B`` (m) give disparity ``d = f B / Z``; NaN, inf or <= 0 mean no data. The steps, in order:
@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from scipy.special import ndtri
 
 from s2r.errors import DepthError
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["EDGE_RELATIVE_JUMP", "degrade_depth", "depth_edges", "fill_at", "hole_field", "hole_kernel",
            "nearest_fill"]

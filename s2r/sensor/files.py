@@ -9,13 +9,13 @@ import yaml
 from s2r.errors import ProfileError
 from s2r.fileio import atomic_write_text
 from s2r.formats.s2r_yaml import profile_from_mapping, read_yaml_mapping
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["dump_sensor_model", "load_sensor_model", "sensor_model_yaml"]
 
 _HEADER = (
     "# s2r sensor model (schema_version 1): image noise in 8-bit grey levels, blur and disparity noise in pixels,\n"
-    "# fill rate in % of a surface's pixels against its distance in metres (see s2r.sensor_model).\n"
+    "# fill rate in % of a surface's pixels against its distance in metres (see s2r.sensor.model).\n"
 )
 
 

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.sensor_model import SensorModel
+from s2r.sensor.model import SensorModel
 
 __all__ = ["blur_image", "degrade_image", "gaussian_blur"]
 

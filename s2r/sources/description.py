@@ -14,11 +14,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.errors import SourceError
+
 if TYPE_CHECKING:
-    from s2r.sources.sdf_include import SkippedInclude
     from s2r.sources.simulator import SimulatorGuess
 
-__all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec"]
+__all__ = ["CameraSpec", "Description", "GazeboDistortion", "JointSpec", "LensIntrinsics", "NoiseSpec", "PluginSpec",
+           "SkippedInclude"]
 
 FloatArray = NDArray[np.float64]
 #: Joint types that move; the path through them is evaluated at joint position zero.
@@ -152,6 +154,26 @@ class JointSpec:
     def movable(self) -> bool:
         """True for joints that move (their zero position is used)."""
         return self.type in MOVABLE_JOINTS
+
+
+@dataclass(frozen=True)
+class SkippedInclude:
+    """An include that names nothing reachable here, left out of the expansion.
+
+    ``message``, ``path``, ``field`` and ``hint`` are the error it is raised as when its models could hold a
+    camera that was asked for; ``cameraless`` when it names a standard model known to hold none (``model://sun``).
+    """
+
+    uri: str
+    message: str
+    path: str
+    field: str
+    hint: str
+    cameraless: bool
+
+    def error(self) -> SourceError:
+        """The error this include is when it cannot be skipped."""
+        return SourceError(self.message, path=self.path, field=self.field, hint=self.hint)
 
 
 @dataclass

@@ -18,7 +18,7 @@ Unknown models and web (Fuel) URIs raise :class:`MissingInclude`, which a reader
 ``model://sun`` need not fail when the cameras asked for are defined inline.
 
 A reader follows its includes like this (one budget for the whole description; run the walk under
-:func:`s2r.sources.isolation.run_limited` as :mod:`s2r.sources.sdf_include` does)::
+:func:`s2r.sources.isolation.run_limited` as :mod:`s2r.sources.sdf.include` does)::
 
     budget = IncludeBudget()
     with budget.top(main_file):

@@ -1,13 +1,13 @@
 """Run untrusted work (expanding a stranger's xacro or SDF includes) in a child process with CPU, memory and time
 limits.
 
-The expression sandbox (:mod:`s2r.sources.xacro_sandbox`) stops a xacro from running code, but an allowed
+The expression sandbox (:mod:`s2r.sources.urdf.xacro_sandbox`) stops a xacro from running code, but an allowed
 expression or macro can still exhaust the machine: ``${10**10**10}`` computes a ten-billion-digit integer,
 ``${'x' * 10**10}`` asks for 10 GB, and a macro that calls itself twice per level doubles the document
 thirty times. No syntax check bounds these, so the expansion runs in a forked child under ``RLIMIT_CPU``
 and ``RLIMIT_AS``, with a wall-clock limit enforced by the parent; a child that overruns is killed and
 the caller gets one :class:`~s2r.errors.SourceError` line that names the limit. SDF include expansion
-(:mod:`s2r.sources.sdf_include`) runs the same way, with its own budget as the first bound.
+(:mod:`s2r.sources.sdf.include`) runs the same way, with its own budget as the first bound.
 
 Where ``os.fork`` does not exist (Windows) the work runs in-process, unlimited.
 """

@@ -11,15 +11,15 @@ from pathlib import Path
 from s2r.errors import SourceError
 from s2r.fileio import read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
-from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec
+from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec, SkippedInclude
 from s2r.sources.includes import shown
 from s2r.sources.kinematics import KinematicTree
-from s2r.sources.mjcf import parse_mjcf
-from s2r.sources.sdf import parse_sdf
-from s2r.sources.sdf_include import SkippedInclude, expand_includes
+from s2r.sources.mjcf.reader import parse_mjcf
+from s2r.sources.sdf.include import expand_includes
+from s2r.sources.sdf.reader import parse_sdf
 from s2r.sources.simulator import infer_simulator
-from s2r.sources.urdf import parse_urdf
-from s2r.sources.xacro_expand import XacroExpansion, expand_xacro_files, is_xacro
+from s2r.sources.urdf.reader import parse_urdf
+from s2r.sources.urdf.xacro import XacroExpansion, expand_xacro_files, is_xacro
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
 __all__ = ["StereoPair", "check_skipped_includes", "load_description", "log_notes", "optical_pose", "select_pair",
@@ -46,12 +46,12 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
                      keyframe: str | None = None) -> Description:
     """Parse a ``.urdf``, ``.xacro`` / ``.urdf.xacro``, ``.sdf`` / ``.world`` or MJCF file into a :class:`Description`.
 
-    An MJCF model (``<mujoco>`` root, :mod:`s2r.sources.mjcf`) is read at its initial state, or at the
+    An MJCF model (``<mujoco>`` root, :mod:`s2r.sources.mjcf.reader`) is read at its initial state, or at the
     ``<keyframe>`` ``keyframe`` names (index or name).
 
     A file of any name that declares the xacro namespace (``robot.gazebo``) is expanded with xacro; SDF
     ``<include>`` of ``model://`` URIs is resolved through ``package_paths`` and GZ_SIM_RESOURCE_PATH /
-    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf_include`). ``env`` is what xacro's ``$(env)`` / ``$(optenv)`` see
+    GAZEBO_MODEL_PATH (:mod:`s2r.sources.sdf.include`). ``env`` is what xacro's ``$(env)`` / ``$(optenv)`` see
     (``--env NAME=VALUE``); the machine's environment is never read for them.
 
     Raises:

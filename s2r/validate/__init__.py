@@ -4,17 +4,27 @@ accuracy on rendered ground truth, the edits that make the sim match, a verdict 
     >>> from s2r.validate import validate, QUICK
     >>> result = validate(load_profile("gazebo_dual_camera"), load_profile("realsense_d435_848x480"), settings=QUICK)
     >>> result.passed, [c.text for c in result.failures]
+
+Layout (imports run one way, top imports bottom; tests/test_import_graph.py):
+
+- ``run`` (the whole comparison), ``tasks`` (its expensive stages in parallel processes), ``settings`` (how much work),
+  ``summary`` and ``report`` (terminal lines, HTML page).
+- :mod:`s2r.validate.advice` -- what to change: edits for Gazebo and MuJoCo sims, root causes grouping the failures.
+- :mod:`s2r.validate.recording` -- sim and real cameras measured on recordings, compared per distance bin.
+- ``verdict`` (every figure against its tolerance) and ``tolerances``.
+- :mod:`s2r.validate.measures` -- the figures: parameter and projection diffs, depth resolution, recovered
+  calibration, depth accuracy on rendered ground truth.
 """
 
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from s2r.validate.advice import Edit, gazebo_hfov_rad, right_joint_origin, suggest_edits
-from s2r.validate.depth_accuracy import DEFAULT_BINS_M, BinStats, DepthAccuracy, measure_depth_accuracy
-from s2r.validate.params import ParamRow, parameter_table
-from s2r.validate.projection import ProjectionDiff, projection_difference
-from s2r.validate.recovery import RecoveryResult, RecoveryRow, compare_recovered, recover_calibration
-from s2r.validate.resolution import DepthResolution, depth_resolution
+from s2r.validate.advice.edits import Edit, gazebo_hfov_rad, right_joint_origin, suggest_edits
+from s2r.validate.measures.depth_accuracy import DEFAULT_BINS_M, BinStats, DepthAccuracy, measure_depth_accuracy
+from s2r.validate.measures.params import ParamRow, parameter_table
+from s2r.validate.measures.projection import ProjectionDiff, projection_difference
+from s2r.validate.measures.recovery import RecoveryResult, RecoveryRow, compare_recovered, recover_calibration
+from s2r.validate.measures.resolution import DepthResolution, depth_resolution
 from s2r.validate.run import FULL, QUICK, Settings, ValidationResult, check_distances, validate
 from s2r.validate.summary import summary_lines
 from s2r.validate.tolerances import Tolerances, load_tolerances

@@ -11,8 +11,8 @@ import numpy as np
 
 from s2r.fileio import prepare_output_dir
 from s2r.htmlreport import Markup, ReportSection, figure_to_data_uri, html_fragment, html_table, write_report
-from s2r.validate.depth_accuracy import DepthAccuracy
-from s2r.validate.recording_report import recording_section
+from s2r.validate.measures.depth_accuracy import DepthAccuracy
+from s2r.validate.recording.report import recording_section
 from s2r.validate.run import ValidationResult
 
 __all__ = ["EXTRA_SECTIONS", "REPORT_NAME", "build_sections", "write_validation_report"]

@@ -16,14 +16,14 @@ from typing import Any
 
 from s2r.errors import ValidateError
 from s2r.profile import StereoProfile
-from s2r.validate.advice import Edit, suggest_edits
-from s2r.validate.advice_mujoco import is_mujoco_sim, suggest_mujoco_edits
-from s2r.validate.causes import RootCause, group_failures
-from s2r.validate.depth_accuracy import DepthAccuracy
-from s2r.validate.params import ParamRow, parameter_table
-from s2r.validate.projection import ProjectionDiff, projection_difference
-from s2r.validate.recovery import RecoveryResult
-from s2r.validate.resolution import DepthResolution, depth_resolution
+from s2r.validate.advice.causes import RootCause, group_failures
+from s2r.validate.advice.edits import Edit, suggest_edits
+from s2r.validate.advice.mujoco import is_mujoco_sim, suggest_mujoco_edits
+from s2r.validate.measures.depth_accuracy import DepthAccuracy
+from s2r.validate.measures.params import ParamRow, parameter_table
+from s2r.validate.measures.projection import ProjectionDiff, projection_difference
+from s2r.validate.measures.recovery import RecoveryResult
+from s2r.validate.measures.resolution import DepthResolution, depth_resolution
 from s2r.validate.settings import FULL, QUICK, Settings
 from s2r.validate.tasks import run_tasks
 from s2r.validate.tolerances import Tolerances
@@ -62,7 +62,7 @@ class ValidationResult:
     notes: list[str] = field(default_factory=list)
     checks: list[Check] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
-    recording: Any = None  # s2r.validate.recording.RecordingComparison with --recording
+    recording: Any = None  # s2r.validate.recording.compare.RecordingComparison with --recording
 
     @property
     def pair(self) -> bool:
@@ -81,7 +81,7 @@ class ValidationResult:
 
     @property
     def root_causes(self) -> list[RootCause]:
-        """The failures grouped by the sim parameter that explains them (see :mod:`s2r.validate.causes`)."""
+        """The failures grouped by the sim parameter that explains them (see :mod:`s2r.validate.advice.causes`)."""
         sim, real = self.roles.get("sim"), self.roles.get("real")
         if sim is not None and real is not None:  # compared in the pixels the images obey, as the parameters are
             sim, real = sim.in_opencv_pixels(), real.in_opencv_pixels()
@@ -174,7 +174,7 @@ def convention_notes(sim: StereoProfile, real: StereoProfile) -> list[str]:
 
 def _gazebo_xml(real: StereoProfile) -> str | None:
     try:
-        from s2r.sources.gazebo_export import export_gazebo
+        from s2r.sources.export.gazebo import export_gazebo
     except ImportError:  # pragma: no cover - the exporter ships with s2r.sources
         return None
     xml, warnings = export_gazebo(real, fmt="urdf")
@@ -207,7 +207,7 @@ def _static_stages(result: ValidationResult, sim: StereoProfile, real: StereoPro
 
 def _mujoco_edit(sim: StereoProfile, real: StereoProfile) -> Edit:
     """The MJCF camera pair that renders like the real camera, with the lens residual MJCF cannot express."""
-    from s2r.sources.mujoco_export import distortion_residual_px
+    from s2r.sources.export.mujoco import distortion_residual_px
 
     worst = max(distortion_residual_px(real.left)[0], distortion_residual_px(real.right)[0])
     lens = f" (MJCF has no lens model: {worst:.2f} px left by the distortion)" if worst >= 0.01 else ""
@@ -225,7 +225,7 @@ def _collect_checks(result: ValidationResult) -> list[Check]:
     if result.pair:
         checks += depth_gap_checks(result.depth["sim"], result.depth["real"], tol)
     if result.recording is not None:
-        from s2r.validate.recording import recording_checks
+        from s2r.validate.recording.compare import recording_checks
 
         checks += recording_checks(result.recording)
     return checks
@@ -233,7 +233,7 @@ def _collect_checks(result: ValidationResult) -> list[Check]:
 
 def _compare_recording(sim: StereoProfile, real: StereoProfile, spec: RecordingSpec, settings: Settings,
                        tol: Tolerances) -> Any:
-    from s2r.validate.recording import compare_recording, compare_recordings
+    from s2r.validate.recording.compare import compare_recording, compare_recordings
 
     if spec.sim is not None:
         return compare_recordings(sim, real, sim_source=spec.sim, real_source=spec.folder, pattern=spec.pattern,
@@ -250,7 +250,8 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
     """Validate ``sim`` against ``real`` (or ``sim`` alone: its self-check). See the module docstring.
 
     With ``recording`` (needs ``real``), the real camera is also measured on its own recording and the sim on its
-    own (``recording.sim``) or on renders of the same boards at the recovered poses (:mod:`s2r.validate.recording`).
+    own (``recording.sim``) or on renders of the same boards at the recovered poses
+    (:mod:`s2r.validate.recording.compare`).
 
     Raises:
         ValidateError: a profile's matcher cannot see the requested distances.

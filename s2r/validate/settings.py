@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from s2r.validate.depth_accuracy import DEFAULT_BINS_M
+from s2r.validate.measures.depth_accuracy import DEFAULT_BINS_M
 
 __all__ = ["FULL", "QUICK", "Settings"]
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import textwrap
 
-from s2r.validate.causes import RootCause
-from s2r.validate.params import ParamRow
+from s2r.validate.advice.causes import RootCause
+from s2r.validate.measures.params import ParamRow
 from s2r.validate.run import ValidationResult
 
 __all__ = ["summary_lines"]
@@ -119,7 +119,7 @@ def summary_lines(result: ValidationResult) -> list[str]:
     if result.depth:
         lines += ["Depth accuracy (rendered scenes, |relative error| by true depth):", *_depth_lines(result)]
     if result.recording is not None:
-        from s2r.validate.recording_report import recording_lines
+        from s2r.validate.recording.report import recording_lines
 
         lines += recording_lines(result.recording)
     lines += _verdict_lines(result)

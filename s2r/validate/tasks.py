@@ -16,8 +16,8 @@ from typing import Any
 from s2r.executor import local_pool
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
-from s2r.validate.depth_accuracy import measure_depth_accuracy
-from s2r.validate.recovery import recover_calibration
+from s2r.validate.measures.depth_accuracy import measure_depth_accuracy
+from s2r.validate.measures.recovery import recover_calibration
 from s2r.validate.settings import Settings
 from s2r.validate.tolerances import Tolerances
 

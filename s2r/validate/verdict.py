@@ -9,10 +9,10 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from s2r.validate.depth_accuracy import BinStats, DepthAccuracy
-from s2r.validate.params import ParamRow
-from s2r.validate.projection import ProjectionDiff
-from s2r.validate.recovery import RecoveryResult
+from s2r.validate.measures.depth_accuracy import BinStats, DepthAccuracy
+from s2r.validate.measures.params import ParamRow
+from s2r.validate.measures.projection import ProjectionDiff
+from s2r.validate.measures.recovery import RecoveryResult
 from s2r.validate.tolerances import Tolerances
 
 __all__ = ["Check", "depth_checks", "depth_gap_checks", "parameter_checks", "projection_checks", "recovery_checks"]

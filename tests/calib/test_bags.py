@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from s2r.calib.solve.stereo_bag import calibrate_stereo_bag
+from s2r.calib.solve.pipelines.stereo_bag import calibrate_stereo_bag
 from s2r.cli import main
 from s2r.profile import StereoProfile
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import Detection, detect_board
-from s2r.calib.solve.resample import PARAMETERS, FoldTask, split_folds
-from s2r.calib.solve.stereo import calibrate_stereo_detections
+from s2r.calib.solve.honesty.resample import PARAMETERS, FoldTask, split_folds
+from s2r.calib.solve.pipelines.stereo import calibrate_stereo_detections
 from s2r.profile import StereoProfile
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 
@@ -106,9 +106,9 @@ def test_a_flat_frame_skips_the_plain_retry(monkeypatch: pytest.MonkeyPatch) -> 
 
 def _fold_tasks(seed: int, *, views: int, noise_px: float) -> list[FoldTask]:
     """The jackknife fold tasks (default lens model) of a calibration of an independent rig."""
-    from s2r.calib.solve import heldout
-    from s2r.calib.solve.lens import lens_model
+    from s2r.calib.solve.honesty import heldout
     from s2r.calib.solve.synth import board_object_points
+    from s2r.lens.models import lens_model
 
     rig = make_rig(seed, views=views, noise_px=noise_px, k3_max=0.0)
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
@@ -123,8 +123,8 @@ def test_jackknife_folds_are_converged_solves() -> None:
     full solution it starts from (which shrank the jackknife 1.5-3x on real sets): every fold's intrinsics and
     baseline equal a solve of the same training views run to a far tighter rule. The lens-model comparison's
     folds, read only for their held-out error, may stop early."""
-    from s2r.calib.solve.joint import solve_joint
-    from s2r.calib.solve.resample import run_fold
+    from s2r.calib.solve.honesty.resample import run_fold
+    from s2r.calib.solve.solvers.joint import solve_joint
 
     tasks = _fold_tasks(33, views=14, noise_px=0.3)
     assert len(tasks) == 4 and not any(t.score_only for t in tasks)
@@ -142,7 +142,7 @@ def test_heldout_pose_fits_reach_their_minimum(monkeypatch: pytest.MonkeyPatch) 
     error equals that of a pose fit run to a far tighter rule within 1e-5 px (stopping one step short of the
     minimum moved them by up to 2e-3 px on a real set, enough to move a corner across the blunder threshold),
     in at most a few evaluations of the normal equations."""
-    from s2r.calib.solve import resample
+    from s2r.calib.solve.honesty import resample
 
     tasks = _fold_tasks(34, views=16, noise_px=0.4)
     calls = []
@@ -171,10 +171,11 @@ def test_warm_and_cold_solves_damp_little_and_reach_the_same_answer(monkeypatch:
     of the normal equations where Gauss-Newton needs 1-2. With the small starting dampings a fold is done in at
     most 3 evaluations, and both the fold and the full solve land where a 1e-3 start run to a far tighter rule
     lands."""
-    from s2r.calib.solve import heldout, joint
-    from s2r.calib.solve.joint import solve_joint
-    from s2r.calib.solve.lens import lens_model
+    from s2r.calib.solve.honesty import heldout
+    from s2r.calib.solve.solvers import joint
+    from s2r.calib.solve.solvers.joint import solve_joint
     from s2r.calib.solve.synth import board_object_points
+    from s2r.lens.models import lens_model
 
     rig = make_rig(34, views=16, noise_px=0.3, k3_max=0.0)
     res = calibrate_stereo_detections(_pairs(rig), pattern=PATTERN, square_m=SQUARE_M, name="t", jobs=1,
@@ -202,7 +203,7 @@ def test_warm_and_cold_solves_damp_little_and_reach_the_same_answer(monkeypatch:
         assert np.max(np.abs(got.K1 - tight.K1)) < 0.01 and np.max(np.abs(got.K2 - tight.K2)) < 0.01  # px
         assert abs(np.linalg.norm(got.T) - np.linalg.norm(tight.T)) < 1e-6  # m
     # the full solve from OpenCV's per-camera calibration (START_DAMPING) against the same from a 1e-3 start
-    from s2r.calib.solve import pair
+    from s2r.calib.solve.solvers import pair
 
     def full_solve(damping: float) -> tuple[pair.PairSolution, int]:
         calls[:] = []
@@ -220,7 +221,7 @@ def test_warm_and_cold_solves_damp_little_and_reach_the_same_answer(monkeypatch:
 def test_only_detector_blunders_leave_the_heldout_error() -> None:
     """Two held-out corners the detector put 6.6 px off (as in a real bag) are left out; the heavy but honest
     tail of a noisy fold is kept (the figure is not flattered by a rule from the smaller training residuals)."""
-    from s2r.calib.solve.resample import FoldOutcome, trim_blunders
+    from s2r.calib.solve.honesty.resample import FoldOutcome, trim_blunders
 
     rng = np.random.default_rng(12)
     nan = np.full((3, 3), np.nan)
@@ -267,7 +268,7 @@ def test_the_covariance_projection_map_equals_many_draws_from_the_covariance() -
     """The covariance map is propagated to first order (as mrcal does); 3000 calibrations drawn from the same
     covariance, each aligned by its best camera rotation, must give the same map (the sampling noise of 3000
     draws is about 1.3 %), and a covariance that is not finite gives no map."""
-    from s2r.calib.solve.projection import covariance_projection_map
+    from s2r.calib.solve.honesty.projection import covariance_projection_map
 
     rng = np.random.default_rng(5)
     K = np.array([[900.0, 0, 641], [0, 905, 355], [0, 0, 1]])
@@ -288,8 +289,8 @@ def test_more_left_out_than_detector_blunders_makes_the_verdict_judge_every_corn
     """Detector blunders are rare (0-2.3 % of the held-out corners on six real sets); on an ill-posed real set
     8.6 % fell beyond the blunder threshold and the trimmed figure read 60 % under the all-corner one. Past 5 %
     the verdict judges the all-corner figure, says so, and a warning names the share."""
-    from s2r.calib.solve.heldout import MAX_BLUNDER_SHARE, StereoHeldout
-    from s2r.calib.solve.verdict import stereo_verdict
+    from s2r.calib.solve.honesty.heldout import MAX_BLUNDER_SHARE, StereoHeldout
+    from s2r.calib.solve.honesty.verdict import stereo_verdict
 
     def held(rejected: int) -> StereoHeldout:
         return StereoHeldout(4, 0.55, 1.39, rejected, 1296, (0.5, 0.6, 0.5, 0.6), ())

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect import Detection
-from s2r.calib.solve.joint import JointInit, solve_joint
-from s2r.calib.solve.jointterms import Masks, State, all_residuals, normal_equations
-from s2r.calib.solve.lens import LENS_MODELS
-from s2r.calib.solve.observations import BoardObservation, StereoObservation, chessboard_observation
-from s2r.calib.solve.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.pipelines.stereo import StereoCalibration, calibrate_stereo_detections
+from s2r.calib.solve.solvers.joint import JointInit, solve_joint
+from s2r.calib.solve.solvers.jointterms import Masks, State, all_residuals, normal_equations
+from s2r.calib.solve.solvers.observations import BoardObservation, StereoObservation, chessboard_observation
 from s2r.errors import CalibrationError
+from s2r.lens.models import LENS_MODELS
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, Rig, make_rig
 
 
@@ -148,8 +148,8 @@ def test_a_joint_solve_stopped_at_its_step_limit_says_so(monkeypatch: pytest.Mon
     """A solve that runs out of steps with the error still falling depends on where it started (a real ill-posed
     set: right cx 288 or 362 px from two starting dampings). It is flagged, the warning says what to do, and
     the verdict is at least CHECK; a solve that converges is not flagged."""
-    from s2r.calib.solve import joint
-    from s2r.calib.solve.verdict import NOT_CONVERGED
+    from s2r.calib.solve.honesty.verdict import NOT_CONVERGED
+    from s2r.calib.solve.solvers import joint
 
     rig = make_rig(41, views=12)
     done = _calibrate(rig)

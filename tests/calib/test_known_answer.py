@@ -37,7 +37,7 @@ def test_synthetic_rig_recovered_within_tolerances(synthetic_set: tuple[Path, St
 @pytest.mark.slow
 def test_pybullet_rendered_boards_recover_the_rig(tmp_path: Path) -> None:
     """The renderer's physically rendered boards (PyBullet TinyRenderer, 2x supersampled, distortion)."""
-    boards = pytest.importorskip("s2r.render.boards")
+    boards = pytest.importorskip("s2r.render.boards.sets")
     truth = distorted_truth()
     rendered = boards.render_board_set(truth, tmp_path / "boards", views=20, seed=0, supersample=2,
                                        noise_sigma=1.0, jobs=2)

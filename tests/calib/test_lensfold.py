@@ -17,9 +17,9 @@ import pytest
 from numpy.typing import NDArray
 
 from s2r.calib.detect import Detection
-from s2r.calib.solve.lensfold import corner_radius, fold_radius, fold_warnings, radial_problem
-from s2r.calib.solve.mono import calibrate_mono_detections
-from s2r.calib.solve.verdict import mono_verdict
+from s2r.calib.solve.honesty.verdict import mono_verdict
+from s2r.calib.solve.pipelines.mono import calibrate_mono_detections
+from s2r.lens.fold import corner_radius, fold_radius, fold_warnings, radial_problem
 from s2r.profile import Camera, Distortion
 
 Array = NDArray[np.float64]

@@ -14,9 +14,9 @@ import yaml
 from numpy.typing import NDArray
 
 from s2r.calib.detect import Detection
-from s2r.calib.solve.mono import MonoCalibration, calibrate_mono_detections
-from s2r.calib.solve.target_mono import calibrate_mono_target_detections
-from s2r.calib.solve.target_stereo import calibrate_stereo_target_detections
+from s2r.calib.solve.pipelines.mono import MonoCalibration, calibrate_mono_detections
+from s2r.calib.solve.pipelines.target_mono import calibrate_mono_target_detections
+from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target_detections
 from s2r.targets import target_from_mapping
 from tests import raycast as rc
 from tests.calib.independent_rig import PATTERN, SIZE, SQUARE_M, board_points, make_rig

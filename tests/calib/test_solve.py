@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from s2r.calib.detect.coverage import coverage_of, coverage_warnings
-from s2r.calib.solve.cvsolve import distortion_flags, outlier_threshold
+from s2r.calib.solve.solvers.cvsolve import distortion_flags, outlier_threshold
 from s2r.errors import CalibrationError
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from s2r.cli import main
-from s2r.formats import kalibr, opencv, ros
+from s2r.formats import kalibr, opencv, ros, ros_read
 from s2r.profile import Distortion
 from tests.conftest import make_rig
 
@@ -38,7 +38,7 @@ def test_fisheye_profile_round_trips_through_formats(tmp_path: Path) -> None:
     opencv.dump_opencv(rig, tmp_path / "stereo.yaml")
     ros.dump_ros_pair(rig, tmp_path / "ros")
     for back in (kalibr.load_kalibr(tmp_path / "camchain.yaml"), opencv.load_opencv(tmp_path / "stereo.yaml"),
-                 ros.load_ros_pair(tmp_path / "ros" / "left.yaml", tmp_path / "ros" / "right.yaml")):
+                 ros_read.load_ros_pair(tmp_path / "ros" / "left.yaml", tmp_path / "ros" / "right.yaml")):
         assert back.left.distortion.model == "equidistant"
         assert back.left.distortion.coefficients == pytest.approx(d.coefficients, abs=1e-6)
     assert "equidistant" in (tmp_path / "camchain.yaml").read_text()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
-from s2r.calib.solve.target_stereo import calibrate_stereo_target
+from s2r.calib.solve.pipelines.target_stereo import calibrate_stereo_target
 from s2r.cli import main
 from s2r.formats.s2r_yaml import load_profile_file
 from s2r.targets import target_from_mapping

@@ -12,7 +12,7 @@ import pytest
 
 from s2r.cli import main
 from s2r.depth.outputs import depth_colour_with_bar, disparity_colour
-from s2r.formats.ros import read_camera_info
+from s2r.formats.ros_read import read_camera_info
 from s2r.formats.s2r_yaml import dump_profile
 from s2r.profile import StereoProfile
 from tests.conftest import make_rig

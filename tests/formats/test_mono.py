@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from s2r.cli import main
-from s2r.formats.ros import read_camera_info
+from s2r.formats.ros_read import read_camera_info
 from s2r.formats.s2r_yaml import dump_profile
 from s2r.profile import Camera, Distortion, MonoProfile, Provenance
 

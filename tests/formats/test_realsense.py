@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from s2r.errors import FormatError
-from s2r.formats.realsense import load_realsense, parse_realsense
+from s2r.formats.realsense.text import load_realsense, parse_realsense
 
 FIXTURE = Path(__file__).parent / "data" / "rs_enumerate_devices_d435.txt"
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from s2r.formats.realsense_recording import load_realsense_recording
+from s2r.formats.realsense.recording import load_realsense_recording
 from s2r.recordings.realsense import RealSenseFrames
 from tests.formats.realsense_writer import rotation
 

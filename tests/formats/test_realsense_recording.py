@@ -11,7 +11,7 @@ import pytest
 
 from s2r.cli import main
 from s2r.errors import FormatError
-from s2r.formats.realsense_recording import load_realsense_recording, read_recording
+from s2r.formats.realsense.recording import load_realsense_recording, read_recording
 from s2r.formats.s2r_yaml import load_profile_file
 from tests.formats import realsense_writer as rw
 

@@ -9,13 +9,8 @@ import pytest
 import yaml
 
 from s2r.errors import FormatError, OutputExistsError
-from s2r.formats.ros import (
-    camera_info_to_yaml,
-    dump_ros_pair,
-    load_ros_pair,
-    read_camera_info,
-    ros_pair_from_profile,
-)
+from s2r.formats.ros import camera_info_to_yaml, dump_ros_pair, ros_pair_from_profile
+from s2r.formats.ros_read import load_ros_pair, read_camera_info
 from s2r.formats.s2r_yaml import dump_profile, load_profile_file
 from s2r.profile import StereoProfile
 from tests.conftest import make_rig

@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from s2r.names import is_safe_name
-from s2r.sensor_fit.images import BoardImage, temporal_noise_var
+from s2r.sensor.fit.images import BoardImage, temporal_noise_var
 from tests.hostile._limits import run_s2r
 from tests.sensor.recordings import H, W, write_profile
 

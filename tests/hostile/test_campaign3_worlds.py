@@ -23,7 +23,7 @@ _FLOOR = '<geom type="plane" size="5 5 0.1"/>'
 
 
 def _gl_reason() -> str | None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     return gl_unavailable_reason()
 
@@ -72,7 +72,7 @@ def test_control_world_with_assets_in_subfolders_reads_and_compiles(tmp_path: Pa
     """meshdir / texturedir honoured, every file handed over in memory: MuJoCo compiles it from another folder."""
     import mujoco
 
-    from s2r.render.mjcf_world import read_world
+    from s2r.render.mujoco.world import read_world
 
     scene = tmp_path / "scene"
     (scene / "meshes").mkdir(parents=True)

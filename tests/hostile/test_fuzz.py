@@ -31,7 +31,7 @@ from s2r.formats.ros import camera_info_to_yaml, ros_pair_from_profile
 from s2r.formats.s2r_yaml import profile_to_yaml
 from s2r.profile import StereoProfile
 from s2r.sources import lint_description, load_description_profile
-from s2r.sources.xacro_sandbox import UnsafeXacro, check_expression
+from s2r.sources.urdf.xacro_sandbox import UnsafeXacro, check_expression
 from tests.formats.rigs import distorted_rotated_rig
 from tests.sources.rigs import XBOT_SDF, two_camera_urdf
 

@@ -56,7 +56,7 @@ def test_a_file_that_grows_while_read_is_read_whole_or_refused(tmp_path: Path,
         info[6] = 10  # st_size
         return os.stat_result(info)
 
-    monkeypatch.setattr(fileio.os, "fstat", stale_fstat)
+    monkeypatch.setattr(os, "fstat", stale_fstat)  # the os module every reader uses
     assert fileio.read_regular_file(path, limit=4096) == bytes(range(256)) * 4
     with pytest.raises(fileio.NotARegularFile, match="grew while being read"):
         fileio.read_regular_file(path, limit=100)

@@ -13,7 +13,7 @@ import pytest
 from s2r.cli import main
 from s2r.errors import SourceError
 from s2r.sources.isolation import Limits, run_limited
-from s2r.sources.xacro_expand import expand_xacro
+from s2r.sources.urdf.xacro import expand_xacro
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="limits need os.fork (POSIX)")
 

@@ -9,8 +9,8 @@ import pytest
 
 from s2r.cli import main
 from s2r.errors import SourceError
-from s2r.sources.xacro_expand import expand_xacro
-from s2r.sources.xacro_sandbox import UnsafeXacro, check_expression
+from s2r.sources.urdf.xacro import expand_xacro
+from s2r.sources.urdf.xacro_sandbox import UnsafeXacro, check_expression
 from tests.sources.rigs import FIXED_URDF
 
 CANARY = "S2R_CANARY_7f3a9c"

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from s2r.calib import calibrate_stereo, find_stereo_pairs
-from s2r.calib.solve.stereo_stream import calibrate_stereo_stream
+from s2r.calib.solve.pipelines.stereo_stream import calibrate_stereo_stream
 from s2r.cli import main
 from s2r.recordings import open_recording
 from tests.recordings.helpers import OPENCV_SET, stills, write_cv, write_h264

@@ -11,10 +11,10 @@ import yaml
 
 from s2r.errors import OutputExistsError, RenderError
 from s2r.geometry import rotation_angle_rad
+from s2r.lens.distortion import project_points
 from s2r.profile import SimulationSettings, StereoProfile
 from s2r.render import render_board_set
-from s2r.render.distortion import project_points
-from s2r.render.poses import BoardGeometry, sample_board_poses
+from s2r.render.boards.poses import BoardGeometry, sample_board_poses
 from tests.conftest import make_rig
 from tests.render._helpers import detect
 

@@ -11,11 +11,11 @@ import pytest
 
 from s2r.calib import calibrate_stereo
 from s2r.calib.detect.coverage import PoseSpread, coverage_of, coverage_warnings
+from s2r.lens.distortion import project_points
 from s2r.profile import StereoProfile
 from s2r.registry import load_profile
 from s2r.render import render_board_set
-from s2r.render.distortion import project_points
-from s2r.render.poses import (
+from s2r.render.boards.poses import (
     CORNER_MAX_VIEW_DEG,
     BoardGeometry,
     _corner_views,

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from s2r.errors import RenderError
+from s2r.lens.distortion import distort_normalised, project_points, undistort_pixels
 from s2r.profile import Camera, Distortion, StereoProfile
 from s2r.render import render_board_set
-from s2r.render.distortion import distort_normalised, project_points, undistort_pixels
-from s2r.render.poses import BoardGeometry
+from s2r.render.boards.poses import BoardGeometry
 from tests.conftest import make_rig
 from tests.render._helpers import detect
 

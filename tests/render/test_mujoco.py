@@ -15,10 +15,10 @@ from scipy.spatial.transform import Rotation
 
 from s2r.cli import main
 from s2r.formats.s2r_yaml import load_profile_file
+from s2r.lens.distortion import project_points
 from s2r.profile import Camera, Distortion, Extrinsics, Provenance, SimulationSettings, StereoProfile
 from s2r.render import render_board_set, render_scene
 from s2r.render.backend import RendererChoice
-from s2r.render.distortion import project_points
 from s2r.targets import target_from_mapping
 from tests.render import mujoco_direct as md
 from tests.render._helpers import detect
@@ -29,7 +29,7 @@ mujoco = pytest.importorskip("mujoco", reason="the mujoco extra is not installed
 
 @pytest.fixture(scope="module", autouse=True)
 def _gl() -> None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     reason = gl_unavailable_reason()
     if reason is not None:
@@ -191,7 +191,7 @@ def test_export_mujoco_loads_and_holds_the_profile(tmp_path: Path, capsys: pytes
 
 
 def test_export_mujoco_residual_figures() -> None:
-    from s2r.sources.mujoco_export import distortion_residual_px
+    from s2r.sources.export.mujoco import distortion_residual_px
 
     cam = Camera(width_px=640, height_px=480, fx_px=500.0, fy_px=500.0, cx_px=319.5, cy_px=239.5,
                  distortion=Distortion(model="plumb_bob", coefficients=(-0.1, 0.0, 0.0, 0.0, 0.0)))
@@ -277,7 +277,7 @@ def test_missing_mujoco_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPa
 
 def test_gl_probe_names_the_platform_that_fails() -> None:
     """The probe runs in a child process; a platform that cannot render here is named in the reason."""
-    from s2r.render._mujoco import _probe
+    from s2r.render.mujoco.backend import _probe
 
     reason = _probe("no-such-platform")
     assert reason is not None and reason.startswith("MUJOCO_GL=no-such-platform:") and "\n" not in reason

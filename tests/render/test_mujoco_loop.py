@@ -28,7 +28,7 @@ Expected = tuple[tuple[float, float, float, float], tuple[float, float, float, f
 
 @pytest.fixture(scope="module", autouse=True)
 def _gl() -> None:
-    from s2r.render._mujoco import gl_unavailable_reason
+    from s2r.render.mujoco.backend import gl_unavailable_reason
 
     reason = gl_unavailable_reason()
     if reason is not None:

@@ -12,8 +12,8 @@ import yaml
 
 from s2r.calib.detect.markers import detect_target
 from s2r.cli import main
+from s2r.lens.distortion import project_points
 from s2r.render import render_board_set
-from s2r.render.distortion import project_points
 from s2r.targets import target_from_mapping
 from tests.conftest import make_rig
 

@@ -9,7 +9,7 @@ from s2r.cli import main
 from s2r.render.rig import finish_image
 from s2r.sensor import SensorModel, degrade_depth, load_sensor_model
 from s2r.sensor.files import dump_sensor_model
-from s2r.sensor_model import FillPoint
+from s2r.sensor.model import FillPoint
 from tests.sensor.recordings import write_profile
 
 MODEL = SensorModel(subpixel_sigma_px=0.1, subpixel_growth_px_per_m=0.05, edge_dropout_px=4.0, hole_scale_px=0.0,

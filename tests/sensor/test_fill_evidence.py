@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from s2r.sensor_fit.depth import DepthFrame
-from s2r.sensor_fit.run import fit_model
+from s2r.sensor.fit.depth import DepthFrame
+from s2r.sensor.fit.run import fit_model
 
 
 def _frame(name: str, distance_m: float, fill_pct: float) -> DepthFrame:

@@ -19,7 +19,7 @@ from s2r.quality.inputs import DEPTH_SUFFIXES, IMAGE_SUFFIXES, list_files, pair_
 from s2r.quality.run import QualityResult, measure_board_views
 from s2r.quality.views import device_fb, device_views
 from s2r.sensor.files import load_sensor_model
-from s2r.validate.recording import compare_recording
+from s2r.validate.recording.compare import compare_recording
 from s2r.validate.tolerances import load_tolerances
 from tests.sensor.recordings import Truth, device_recording, perfect_recording, stereo_recording, write_profile
 

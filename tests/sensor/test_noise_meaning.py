@@ -10,10 +10,10 @@ from pathlib import Path
 import cv2
 import pytest
 
-from s2r.render.boards import render_board_set
-from s2r.sensor_fit.images import BoardImage, image_noise_dn
-from s2r.sensor_fit.run import board_image, fit_images
-from s2r.sensor_model import SensorModel
+from s2r.render.boards.sets import render_board_set
+from s2r.sensor.fit.images import BoardImage, image_noise_dn
+from s2r.sensor.fit.run import board_image, fit_images
+from s2r.sensor.model import SensorModel
 from tests.conftest import make_rig
 
 RIG = make_rig(name="noise_rig", width=480, height=360, hfov_rad=1.0, baseline_m=0.06)

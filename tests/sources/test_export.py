@@ -14,7 +14,7 @@ from s2r.profile import CalibrationQuality, StereoProfile
 from s2r.registry import load_profile
 from s2r.sources import load_description_profile
 from s2r.sources.conventions import opencv_to_gazebo_distortion
-from s2r.sources.gazebo_export import export_gazebo
+from s2r.sources.export.gazebo import export_gazebo
 from tests.conftest import make_rig
 
 SUFFIX = {"urdf": "urdf", "sdf": "sdf", "gz-sim": "sdf"}

@@ -12,7 +12,7 @@ from s2r.errors import SourceError
 from s2r.formats.s2r_yaml import dump_profile
 from s2r.registry import load_profile
 from s2r.sources import load_description_profile
-from s2r.sources.gazebo_export import EXPORT_FORMATS, comment_text, export_gazebo
+from s2r.sources.export.gazebo import EXPORT_FORMATS, comment_text, export_gazebo
 from s2r.sources.xmlparse import parse_xml
 from tests.conftest import make_rig
 

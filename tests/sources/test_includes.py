@@ -14,7 +14,7 @@ from s2r.errors import SourceError
 from s2r.registry import load_profile
 from s2r.sources import load_description_profile
 from s2r.sources.includes import IncludeBudget, MissingInclude, model_name, resolve
-from s2r.sources.sdf_include import MODEL_PATH_ENVS
+from s2r.sources.sdf.include import MODEL_PATH_ENVS
 
 FIXTURES = Path(__file__).parent / "fixtures"
 CAMERA_LINK = """<link name="link">

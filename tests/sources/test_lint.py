@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from s2r.cli import main
-from s2r.formats.ros import read_camera_info
-from s2r.sources.lint import Finding, lint_description
+from s2r.formats.ros_read import read_camera_info
+from s2r.sources.lint.rules import Finding, lint_description
 from tests.sources.rigs import DATA, FIXED_URDF, SEED_URDF, XBOT_SDF, sensor, two_camera_urdf, write
 
 

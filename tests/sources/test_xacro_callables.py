@@ -10,8 +10,8 @@ import pytest
 
 from s2r.cli import main
 from s2r.errors import SourceError
-from s2r.sources.xacro_expand import expand_xacro
-from s2r.sources.xacro_sandbox import UnsafeXacro, allowed_functions, check_callees
+from s2r.sources.urdf.xacro import expand_xacro
+from s2r.sources.urdf.xacro_sandbox import UnsafeXacro, allowed_functions, check_callees
 
 HEAD = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
 

@@ -12,10 +12,10 @@ import pytest
 
 from s2r.profile import StereoProfile
 from s2r.registry import load_profile
-from s2r.validate.advice import suggest_edits
-from s2r.validate.causes import RootCause, group_failures
-from s2r.validate.params import parameter_table
-from s2r.validate.projection import projection_difference
+from s2r.validate.advice.causes import RootCause, group_failures
+from s2r.validate.advice.edits import suggest_edits
+from s2r.validate.measures.params import parameter_table
+from s2r.validate.measures.projection import projection_difference
 from s2r.validate.tolerances import Tolerances
 from s2r.validate.verdict import Check, parameter_checks, projection_checks
 from tests.conftest import make_rig

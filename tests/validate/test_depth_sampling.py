@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from s2r.render.layouts import SPAN_RATIO, _field_rays, _span
-from s2r.validate.depth_sampling import JITTER, BinSamples, frame_subpixel_rms, jitter_distances
+from s2r.validate.measures.depth_sampling import JITTER, BinSamples, frame_subpixel_rms, jitter_distances
 from s2r.validate.settings import FULL, QUICK
 from tests.conftest import make_rig
 

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from s2r.lens.distortion import project_points, undistort_pixels
 from s2r.profile import CameraUncertainty, Extrinsics, StereoProfile
 from s2r.registry import load_profile
-from s2r.render.distortion import project_points, undistort_pixels
-from s2r.validate.params import ParamRow, parameter_table
-from s2r.validate.projection import projection_difference
+from s2r.validate.measures.params import ParamRow, parameter_table
+from s2r.validate.measures.projection import projection_difference
 from s2r.validate.tolerances import Tolerances
 from tests.conftest import make_rig
 

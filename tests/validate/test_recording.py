@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from s2r.render.boards import render_board_set
-from s2r.validate.recording import compare_recording, recording_checks
-from s2r.validate.recording_report import recording_lines, recording_sections
+from s2r.render.boards.sets import render_board_set
+from s2r.validate.recording.compare import compare_recording, recording_checks
+from s2r.validate.recording.report import recording_lines, recording_sections
 from s2r.validate.tolerances import Tolerances
 from tests.conftest import make_rig
 

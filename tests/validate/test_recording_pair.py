@@ -14,8 +14,8 @@ from s2r.errors import DepthError
 from s2r.formats.s2r_yaml import dump_profile
 from s2r.quality.source import parse_source
 from s2r.registry import load_profile
-from s2r.validate.recording import compare_recordings, recording_checks
-from s2r.validate.recording_report import recording_lines, recording_sections
+from s2r.validate.recording.compare import compare_recordings, recording_checks
+from s2r.validate.recording.report import recording_lines, recording_sections
 from s2r.validate.tolerances import Tolerances
 from tests.conftest import make_rig
 from tests.quality.known_plane import Camera, render, write_png16
@@ -135,7 +135,7 @@ def test_cli_both_recordings(tmp_path: Path, capsys: pytest.CaptureFixture[str])
 
 
 def test_device_depth_real_side_with_the_sim_rendered_at_its_poses(tmp_path: Path) -> None:
-    from s2r.validate.recording import compare_recording
+    from s2r.validate.recording.compare import compare_recording
 
     rig = make_rig(name="small_rig", width=320, height=240, baseline_m=0.06)
     K = rig.left.K

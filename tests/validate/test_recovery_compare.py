@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from s2r.profile import CameraUncertainty, Extrinsics, StereoProfile
-from s2r.validate.recovery import compare_recovered
+from s2r.validate.measures.recovery import compare_recovered
 from s2r.validate.tolerances import Tolerances
 from tests.conftest import make_rig
 

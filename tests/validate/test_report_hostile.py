@@ -15,7 +15,7 @@ from s2r.htmlreport import CONTENT_SECURITY_POLICY, ReportSection, html_table, w
 from s2r.quality.metrics import FrameQuality
 from s2r.quality.report import write_quality_report
 from s2r.quality.run import QualityResult
-from s2r.validate.recording import RecordingComparison
+from s2r.validate.recording.compare import RecordingComparison
 from s2r.validate.report import write_validation_report
 from tests.validate.test_report_layout import _result
 

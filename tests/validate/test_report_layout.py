@@ -13,8 +13,8 @@ import numpy as np
 
 from s2r.htmlreport import ReportSection, render_report
 from s2r.registry import load_profile
-from s2r.validate.depth_accuracy import DEFAULT_BINS_M, DepthAccuracy, bin_stats, within_stats
-from s2r.validate.recovery import RecoveryResult, RecoveryRow
+from s2r.validate.measures.depth_accuracy import DEFAULT_BINS_M, DepthAccuracy, bin_stats, within_stats
+from s2r.validate.measures.recovery import RecoveryResult, RecoveryRow
 from s2r.validate.report import EXTRA_SECTIONS, build_sections
 from s2r.validate.run import QUICK, ValidationResult, _collect_checks, _static_stages
 from s2r.validate.summary import summary_lines

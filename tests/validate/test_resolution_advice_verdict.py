@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from s2r.registry import load_profile
-from s2r.validate.advice import gazebo_hfov_rad, right_joint_origin, suggest_edits
-from s2r.validate.depth_accuracy import DEFAULT_BINS_M, bin_stats, pixel_errors, within_stats
-from s2r.validate.params import parameter_table
-from s2r.validate.resolution import depth_resolution
+from s2r.validate.advice.edits import gazebo_hfov_rad, right_joint_origin, suggest_edits
+from s2r.validate.measures.depth_accuracy import DEFAULT_BINS_M, bin_stats, pixel_errors, within_stats
+from s2r.validate.measures.params import parameter_table
+from s2r.validate.measures.resolution import depth_resolution
 from s2r.validate.tolerances import Tolerances
 from s2r.validate.verdict import parameter_checks
 from tests.conftest import make_rig
@@ -71,7 +71,7 @@ def test_advice_values_are_what_export_gazebo_writes() -> None:
     import re
     import xml.etree.ElementTree as ET
 
-    from s2r.sources.gazebo_export import export_gazebo
+    from s2r.sources.export.gazebo import export_gazebo
 
     real = make_rig(cx=331.25, cy=228.75, origin="real")
     left = real.left.model_copy(update={"fy_px": real.left.fx_px * 1.03})

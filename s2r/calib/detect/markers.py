@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.detect import detect_board
+from s2r.calib.detect.chessboard import detect_board
 from s2r.targets import AnyTarget, AprilGridTarget, CharucoTarget, CheckerboardTarget
 
 __all__ = [

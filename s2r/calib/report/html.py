@@ -28,9 +28,9 @@ from s2r.calib.report.plots import (
     residual_vectors,
     thumbnail_strip,
 )
-from s2r.calib.solve.mono import MonoCalibration
-from s2r.calib.solve.projection import ProjectionMap
-from s2r.calib.solve.stereo import StereoCalibration
+from s2r.calib.solve.honesty.projection import ProjectionMap
+from s2r.calib.solve.pipelines.mono import MonoCalibration
+from s2r.calib.solve.pipelines.stereo import StereoCalibration
 from s2r.fileio import OutputBatch
 from s2r.htmlreport import (
     ReportSection,

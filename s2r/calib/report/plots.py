@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.calib.detect.coverage import FOOTPRINT_CELL_PX, Coverage
-from s2r.calib.solve.projection import ProjectionMap
+from s2r.calib.solve.honesty.projection import ProjectionMap
 from s2r.htmlreport import figure_to_data_uri, image_to_data_uri
 
 __all__ = ["board_poses_3d", "coverage_maps", "projection_uncertainty", "residual_vectors", "thumbnail_strip"]
