@@ -73,7 +73,8 @@ test-recordings: $(STAMP) $(BYTECODE)
 # root), then runs the tests marked ros. The -dev packages and libnodeletlib-tools carry the nodelet plugin
 # descriptions and nodelet's package.xml that stereo_image_proc needs to load.
 ROS_DEBS := ros-core ros-image-proc ros-stereo-image-proc libimage-proc-dev libstereo-image-proc-dev \
-	libnodeletlib-tools python3-image-geometry python3-camera-calibration-parsers python3-rosbag python3-stereo-msgs python3-tf2-msgs
+	libnodeletlib-tools python3-image-geometry python3-camera-calibration-parsers python3-rosbag python3-stereo-msgs python3-tf2-msgs \
+	python3-tf2-ros
 test-ros: $(STAMP)
 	@missing=$$(for deb in $(ROS_DEBS); do dpkg -s $$deb >/dev/null 2>&1 || echo $$deb; done); \
 	if [ -n "$$missing" ]; then apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y \

@@ -1,6 +1,7 @@
 """Reading image files through OpenCV in s2r's own words (the one place image files are decoded).
 
-OpenCV's own log (``[ WARN:0@0.04] global grfmt_png.cpp ...``) is silenced when this module is imported, and
+OpenCV's own log (``[ WARN:0@0.04] global grfmt_png.cpp ...``) and FFmpeg's inside it (``[h264 @ 0x...] error
+while decoding MB ...``) are silenced when this module is imported, and
 the messages libpng and libjpeg print straight to the process's stderr ("libpng error: IDAT: CRC error",
 "Premature end of JPEG file") are kept off the terminal while a file decodes. Instead the caller gets a
 reason in plain words: not an image, truncated, or corrupt. A truncated JPEG that OpenCV would decode into
@@ -40,8 +41,19 @@ _LOCK = threading.Lock()
 _STATE = {"depth": 0, "saved_fd": -1}
 
 
+#: FFmpeg's log level inside OpenCV (``AV_LOG_QUIET``), unless the user set ``OPENCV_FFMPEG_LOGLEVEL`` to debug.
+_FFMPEG_QUIET = "-8"
+
+
 def silence_opencv_log() -> None:
-    """Silence OpenCV's own logging (its C++ warnings and errors); s2r reports failures itself."""
+    """Silence OpenCV's own logging (its C++ warnings and errors) and FFmpeg's inside it; s2r reports failures
+    itself, in one line.
+
+    FFmpeg's lines ("[h264 @ 0x...] error while decoding MB ...") come from its decoder threads, also after a
+    frame was returned, so redirecting stderr around each call cannot catch them. OpenCV reads
+    ``OPENCV_FFMPEG_LOGLEVEL`` once, when its FFmpeg backend first opens a file: set here, at import, before any
+    video is opened (a value the user set, to debug, is kept)."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", _FFMPEG_QUIET)
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
 
 

@@ -237,8 +237,10 @@ def entry() -> NoReturn:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from s2r.fileio import removing_new_folders_on_failure
+    from s2r.fileio import protect_inputs, removing_new_folders_on_failure
 
+    given = [v for value in vars(args).values() for v in (value if isinstance(value, list) else [value])]
+    protect_inputs([v for v in given if isinstance(v, (str, os.PathLike))])  # --force never replaces their folder
     try:
         with removing_new_folders_on_failure():  # a refused run leaves no empty -o / --report folder behind
             code: int = args.func(args)

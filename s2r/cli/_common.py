@@ -137,6 +137,13 @@ def add_recording_inputs(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--depth-topic", help="depth topic in --bag (16UC1 mm or 32FC1 m)")
 
 
+def add_jobs(parser: Any, *, default: int | None, help: str) -> None:
+    """Add ``--jobs N`` (dest ``jobs``), the one name of parallelism across commands (calibrate, render,
+    validate, depth, fleet check), with ``--workers`` as a hidden alias (depth and fleet check's former name)."""
+    parser.add_argument("--jobs", type=int, default=default, metavar="N", help=help)
+    parser.add_argument("--workers", type=int, dest="jobs", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+
 def add_force(parser: argparse.ArgumentParser) -> None:
     """Add ``--force`` (allow replacing existing outputs)."""
     parser.add_argument("--force", action="store_true", help="replace existing outputs")

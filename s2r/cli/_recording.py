@@ -31,6 +31,30 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _start_stamp(text: str) -> int:
+    """``--start-stamp``: seconds since the Unix epoch (``1714564800.25``) or an ISO 8601 time with its zone
+    (``2024-05-01T12:00:00Z``, ``...+02:00``), as ns since the epoch."""
+    from datetime import datetime
+    from decimal import Decimal, InvalidOperation
+
+    try:
+        seconds = Decimal(text)
+    except InvalidOperation:
+        seconds = None
+    if seconds is None:
+        try:
+            when = datetime.fromisoformat(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not seconds since the Unix epoch nor an ISO 8601 time: {text!r} "
+                                             "(e.g. 2024-05-01T12:00:00Z)") from None
+        if when.tzinfo is None:
+            raise argparse.ArgumentTypeError(f"{text!r} has no time zone: add Z (UTC) or an offset such as +02:00")
+        return round(when.timestamp() * 1e6) * 1000
+    if not seconds.is_finite() or not 0 < seconds < 2**63 // 10**9:
+        raise argparse.ArgumentTypeError(f"must be positive seconds since the Unix epoch, got {text!r}")
+    return int(seconds * 10**9)
+
+
 def add_recording_arguments(parser: argparse.ArgumentParser, *, positional: str | None = "recording",
                             max_frames_default: int | None = None, max_frames_help: str | None = None,
                             what: str = "stereo pairs") -> None:
@@ -61,6 +85,10 @@ def add_recording_arguments(parser: argparse.ArgumentParser, *, positional: str 
     group.add_argument("--left-video", type=Path, metavar="FILE", help="left camera video (with --right-video)")
     group.add_argument("--right-video", type=Path, metavar="FILE",
                        help="right camera video, paired with --left-video by frame index")
+    group.add_argument("--start-stamp", type=_start_stamp, metavar="TIME",
+                       help="--video / --left-video: when the video began, seconds since the Unix epoch or ISO 8601 "
+                       "with a zone (2024-05-01T12:00:00Z); frames are stamped TIME + their time in the video "
+                       "(default: the video file's modification time)")
     group.add_argument("--every", type=_positive_int, default=1, metavar="N",
                        help="use every N-th frame or pair of the recording (default 1)")
     group.add_argument("--max-frames", type=_positive_int, default=max_frames_default, metavar="N",
@@ -84,7 +112,7 @@ def spec_from_args(args: argparse.Namespace, *, positional: str | None = "record
                          max_dt_s=get("max_dt") if get("max_dt") is not None else 0.01,
                          video=get("video"), layout=get("layout") or "sbs", left_video=get("left_video"),
                          right_video=get("right_video"), every=get("every") or 1,
-                         max_frames=get("max_frames") if max_frames else None)
+                         max_frames=get("max_frames") if max_frames else None, start_ns=get("start_stamp"))
 
 
 def recording_from_args(args: argparse.Namespace, *, expected_size: Any = None, grey: bool = False,

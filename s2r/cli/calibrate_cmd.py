@@ -10,7 +10,7 @@ from typing import Any
 from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
 from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import CalibrationError, terminal_safe
-from s2r.fileio import OutputBatch, check_output_free, prepare_output_dir
+from s2r.fileio import OutputBatch, check_output_free, discard_on_failure, prepare_output_dir
 from s2r.limits import MAX_SQUARE_M
 
 __all__ = ["register"]
@@ -139,6 +139,8 @@ def run(args: argparse.Namespace) -> int:
         "progress": ProgressBar(enabled=not (args.quiet or args.json)),
         "cache_dir": None if args.no_cache else out.with_name(out.name + ".corners"),
     }
+    if common["cache_dir"] is not None and not (common["cache_dir"].exists() or common["cache_dir"].is_symlink()):
+        discard_on_failure(common["cache_dir"])  # a failed run leaves no OUT.yaml.corners/ it created
     try:
         result = _solve(args, pattern, lens, target, common)
     except CalibrationError as exc:

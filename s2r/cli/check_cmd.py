@@ -14,7 +14,17 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, load_profile, print_json, to_jsonable
+from s2r.cli._common import (
+    ProgressBar,
+    add_force,
+    add_jobs,
+    add_json,
+    add_profile_positional,
+    load_profile,
+    print_json,
+    profile_argument,
+    to_jsonable,
+)
 from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import CheckError
 
@@ -40,7 +50,7 @@ def register(sub: Any) -> None:
         description="Rectify ordinary stereo pairs with the profile, match features, and fit the relative-rotation "
         "error that explains their vertical disparity. Verdict good / drifted / cannot tell; --fix writes the "
         "profile with the rotation re-estimated. Exit 0 good, 1 drifted or cannot tell, 2 bad input.")
-    p.add_argument("profile", help="profile name or path")
+    add_profile_positional(p, help="profile name or path (or give it as --profile)")
     add_recording_arguments(p, max_frames_default=20, max_frames_help=_MAX_FRAMES_HELP, what="ordinary stereo pairs")
     _add_settings(p, max_frames=False)
     p.add_argument("--report", type=Path, metavar="DIR", help="write DIR/check.html")
@@ -55,12 +65,12 @@ def register(sub: Any) -> None:
     fc = fleet_sub.add_parser(
         "check", help="check every robot of FLEET.yaml, one Dask task each",
         description="Each robot (name, profile, recording) is one task on Dask's distributed scheduler: a local "
-        "cluster of --workers processes, or --scheduler tcp://host:8786. Writes DIR/index.html, DIR/summary.json "
+        "cluster of --jobs processes, or --scheduler tcp://host:8786. Writes DIR/index.html, DIR/summary.json "
         "and DIR/NAME/check.html. Exit 0 every robot good, 1 any not good, 2 FLEET.yaml is bad input.")
     fc.add_argument("fleet_file", type=Path, metavar="FLEET.yaml")
     fc.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="output folder")
     fc.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (default: a local cluster)")
-    fc.add_argument("--workers", type=int, default=2, help="local cluster worker processes (default 2)")
+    add_jobs(fc, default=2, help="local cluster worker processes (default 2)")
     fc.add_argument("--resume", action="store_true",
                     help="check only the robots an interrupted run into the same -o DIR did not finish")
     fc.add_argument("--history", type=Path, metavar="HDIR",
@@ -85,6 +95,14 @@ def _settings(args: argparse.Namespace) -> Any:
     return CheckSettings(tolerance_deg=(args.tolerance,) * 3, tolerance_px=args.tolerance_px)
 
 
+def _profile_and_folder(args: argparse.Namespace) -> None:
+    """``--profile P`` (as depth and sensor take it) or the PROFILE positional into ``args.profile``; with
+    ``--profile`` the first positional is the recording FOLDER."""
+    if args.profile_option is not None and args.profile is not None and args.recording is None:
+        args.profile, args.recording = None, Path(args.profile)
+    args.profile = profile_argument(args, command="check")
+
+
 def _refuse_reversed(args: argparse.Namespace) -> None:
     """``s2r check logs/run1 real.yaml``: a folder where the profile goes and a profile file where the recording
     goes is the arguments the wrong way round."""
@@ -97,11 +115,7 @@ def _refuse_reversed(args: argparse.Namespace) -> None:
 def _source(args: argparse.Namespace) -> Any:
     from s2r.drift.source import StereoSource
 
-    spec = spec_from_args(args, max_frames=False).check(error=CheckError)
-    return StereoSource(folder=spec.folder, left_glob=spec.left_glob, right_glob=spec.right_glob, bag=spec.bag,
-                        left_topic=spec.left_topic, right_topic=spec.right_topic, max_frames=args.max_frames,
-                        video=spec.video, layout=spec.layout, left_video=spec.left_video, right_video=spec.right_video,
-                        every=spec.every, max_dt_s=spec.max_dt_s)
+    return StereoSource(spec_from_args(args, max_frames=False).check(error=CheckError), max_frames=args.max_frames)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -109,6 +123,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.source import profile_sizes, read_pairs
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
+    _profile_and_folder(args)
     if args.fix != (args.output is not None):
         raise CheckError("--fix and -o go together", field="--fix", hint="pass --fix -o corrected.yaml")
     _refuse_reversed(args)
@@ -185,11 +200,11 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     from s2r.drift.fleet_store import check_history_folder
 
     settings = _settings(args)
-    if args.workers < 1:
-        raise CheckError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    if args.jobs < 1:
+        raise CheckError(f"must be at least 1, got {args.jobs}", field="--jobs/--workers", hint="e.g. 2")
     cores = os.cpu_count() or 1
-    if args.scheduler is None and args.workers > 4 * cores:  # each is a process holding images: not a queue
-        raise CheckError(f"{args.workers} local worker processes on {cores} cores", field="--workers",
+    if args.scheduler is None and args.jobs > 4 * cores:  # each is a process holding images: not a queue
+        raise CheckError(f"{args.jobs} local worker processes on {cores} cores", field="--jobs/--workers",
                          hint=f"at most {4 * cores} here; for more, run a Dask cluster and pass --scheduler")
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
     history = check_history_folder(args.history) if args.history is not None else None
@@ -227,7 +242,7 @@ def _run_fleet(args: argparse.Namespace, jobs: list[Any], journal: Any) -> Any:
     from s2r.drift.fleet import run_fleet
 
     bar = ProgressBar(enabled=not (args.quiet or args.json))
-    return run_fleet(jobs, workers=args.workers, scheduler=args.scheduler, progress=bar, journal=journal,
+    return run_fleet(jobs, workers=args.jobs, scheduler=args.scheduler, progress=bar, journal=journal,
                      resume=args.resume)
 
 
@@ -242,6 +257,10 @@ def _fleet_output(args: argparse.Namespace) -> Any:
     out = Path(args.output)
     if not args.resume:  # the folder is made when the first robot finishes (none for a cluster never reached)
         check_output_dir(out, force=args.force)
+        if out.is_dir() and any(out.iterdir()):  # --force: replaced whole (an old robot's folder must not stay)
+            from s2r.fileio import prepare_output_dir
+
+            prepare_output_dir(out, force=args.force)
         Journal(out).remove()
         return Journal(out)
     journal = Journal(out)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from s2r.cli._common import ProgressBar, add_force, add_json, print_json
+from s2r.cli._common import ProgressBar, add_force, add_jobs, add_json, print_json
 from s2r.cli._recording import add_recording_arguments
 from s2r.cli.depth_stream_cmd import (
     add_stream_arguments,
@@ -81,7 +81,7 @@ def register(sub: Any) -> None:
     parser.add_argument("--left-dir", type=Path, help="folder of left images (the NN_* sequence layout)")
     parser.add_argument("--right-dir", type=Path, help="folder of right images, paired by sorted names")
     add_recording_arguments(parser, positional=None)
-    parser.add_argument("--workers", type=int, default=2, help="matching threads, sequences and recordings (default 2)")
+    add_jobs(parser, default=2, help="matching threads, sequences and recordings (default 2)")
     add_force(parser)
     add_json(parser)
     parser.set_defaults(func=_cmd_depth)
@@ -147,8 +147,8 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if args.alpha is not None and not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
-    if args.workers < 1:
-        raise DepthError(f"must be at least 1, got {args.workers}", field="--workers", hint="e.g. 2")
+    if args.jobs < 1:
+        raise DepthError(f"must be at least 1, got {args.jobs}", field="--jobs/--workers", hint="e.g. 2")
     if args.fov is not None and not 10.0 <= args.fov <= 170.0:  # NaN fails too
         raise DepthError(f"must be 10-170 degrees, got {args.fov}", field="--fov", hint="e.g. --fov 90")
     args.colour_range = _colour_range(args.colour_range)
@@ -217,6 +217,8 @@ def _run_pair(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     if depth_range is not None:
         result, removed = limit_depth_range(result, *depth_range)
     rect = pipeline.geometry_for((left.shape[1], left.shape[0])).rectification
+    if args.force:  # replaced whole: no points.ply of an earlier --ply run stays beside the new files
+        prepare_output_dir(args.output, force=True)
     with OutputBatch(force=args.force, root=args.output) as batch:  # every file, or none
         written = write_outputs(args.output, result, ply=args.ply, batch=batch, colour_range_m=args.colour_range)
         written.append(write_camera_info(args.output / "camera_info.yaml", rect, name=f"{pipeline.profile.name}/"
@@ -256,7 +258,7 @@ def _run_sequence(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     bar = ProgressBar(enabled=None if not args.quiet else False)
     depth_range = _depth_range(args, pipeline)
     with OutputBatch(force=args.force, root=args.output) as batch:  # the whole sequence, or nothing
-        frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.workers,
+        frames = run_sequence(pipeline, pairs, args.output, ply=args.ply, force=args.force, workers=args.jobs,
                               progress=bar, depth_range_m=depth_range, batch=batch,
                               colour_range_m=args.colour_range)
         # every frame has the profile's size unless --resize: then the camera_info of the first frame's size

@@ -71,19 +71,32 @@ def recording_given(args: argparse.Namespace) -> bool:
     return any(getattr(args, name, None) is not None for name in _RECORDING_OPTIONS)
 
 
-def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, str]:
-    """The frames to stream and a description of them: the recording, the --left-dir pairs or the one pair."""
+def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, str, Any]:
+    """The frames to stream, a description of them and their source (None for the --left-dir pairs or the one
+    pair, which skip nothing)."""
     from s2r.depth.sequence import pair_frames, pair_images
 
     if args.left_dir is not None:
-        return pair_frames(pair_images(args.left_dir, args.right_dir)), f"{args.left_dir} + {args.right_dir}"
+        return pair_frames(pair_images(args.left_dir, args.right_dir)), f"{args.left_dir} + {args.right_dir}", None
     if args.pair_left is not None:
-        return pair_frames([(args.pair_left, args.pair_right)]), f"{args.pair_left} + {args.pair_right}"
+        return pair_frames([(args.pair_left, args.pair_right)]), f"{args.pair_left} + {args.pair_right}", None
     from s2r.cli._recording import recording_from_args
 
     size = None if args.resize else pipeline.profile.image_size
     source = recording_from_args(args, expected_size=size, error=DepthError, positional="recording")
-    return source.frames(), source.describe()
+    return source.frames(), source.describe(), source
+
+
+#: How many skipped inputs the warning names.
+_NAMED_SKIPPED = 5
+
+
+def _warn_skipped(described: str, skipped: list[str]) -> None:
+    """Say how many inputs had no partner and were skipped, naming the first few."""
+    if skipped:
+        more = f" and {len(skipped) - _NAMED_SKIPPED} more" if len(skipped) > _NAMED_SKIPPED else ""
+        log.warning("%s: %d input image(s) had no partner and were skipped (no depth for them): %s%s", described,
+                    len(skipped), ", ".join(skipped[:_NAMED_SKIPPED]), more)
 
 
 #: A global ROS graph-resource namespace (ROS 1 and ROS 2 naming rules): "/" or "/a/b_2" (no empty or digit-led parts).
@@ -122,6 +135,7 @@ def _check_output(args: argparse.Namespace) -> None:
 def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     """Stream the input through the pipeline into the ``--to`` writer; publish whole; print a summary."""
     from s2r.depth.writers import StreamOptions, open_writer, write_stream
+    from s2r.recordings import skipped_inputs
 
     _check_output(args)
     options = StreamOptions(namespace=args.namespace, depth_encoding=args.depth_encoding,
@@ -130,28 +144,35 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     depth_range = None if args.keep_out_of_range else (m.min_depth_m, m.max_depth_m)
     seen: dict[str, Any] = {}
     with open_writer(args.to, args.output, pipeline, force=args.force, options=options) as writer:
-        frames, described = _frames(args, pipeline)
-        stream = _noting(pipeline.stream(frames, workers=args.workers, depth_range_m=depth_range), seen)
+        frames, described, source = _frames(args, pipeline)
+        stream = _noting(pipeline.stream(frames, workers=args.jobs, depth_range_m=depth_range), seen)
         count = write_stream(writer, stream, progress=ProgressBar(enabled=None if not args.quiet else False))
         published = writer.publish()
+    skipped = skipped_inputs(source)
+    _warn_skipped(described, skipped)
     synthesized = bool(seen.get("synthesized"))
     if synthesized:
         log.warning("the input carries no time stamps (still files): stamps were synthesized, 1 s + 0.1 s per frame "
                     "(frames.csv / the bag say so)")
     summary = {"profile": pipeline.profile.name, "preset": pipeline.preset, "to": args.to, "frames": count,
                "input": described, "output": str(args.output), "frame_id": seen.get("frame_id"),
-               "stamps": "synthesized" if synthesized else "recorded", "published": [str(p) for p in published]}
+               "stamps": "synthesized" if synthesized else "recorded", "published": [str(p) for p in published],
+               "skipped_unpaired": len(skipped), "skipped_first": skipped[:_NAMED_SKIPPED]}
     if args.json:
         print_json(summary)
     else:
+        unpaired = f", {len(skipped)} unpaired input image(s) skipped" if skipped else ""
         print(f"{pipeline.profile.name} / {pipeline.preset}: {count} frames of {described} -> {args.output} "
-              f"({args.to}, frame_id {seen.get('frame_id')}, {summary['stamps']} stamps)")
+              f"({args.to}, frame_id {seen.get('frame_id')}, {summary['stamps']} stamps{unpaired})")
     return 0
 
 
 def _noting(frames: Iterator[DepthFrame], seen: dict[str, Any]) -> Iterator[DepthFrame]:
-    """``frames`` unchanged, noting the first frame's frame_id and whether any stamp was synthesized."""
+    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame) and whether
+    any stamp was synthesized."""
+    from s2r.depth.stream import rectified_frame_id
+
     for frame in frames:
-        seen.setdefault("frame_id", frame.frame_id)
+        seen.setdefault("frame_id", rectified_frame_id(frame.frame_id))
         seen["synthesized"] = seen.get("synthesized", False) or frame.stamp_synthesized
         yield frame

@@ -9,8 +9,11 @@ thread consumes the results in recording order (a writer encodes PNGs or seriali
     ...     frame.result.depth      # (H, W) float32 metres, rectified left optical frame, NaN invalid
     ...     frame.stamp_ns, frame.frame_id, frame.name
 
-Frames: every output is in the RECTIFIED left camera's pixel grid and frame (as stereo_image_proc's), labelled
-with the profile's left ``frame_id`` (or the input's when the profile has none).
+Frames: every output is in the RECTIFIED left camera's pixel grid and frame. :attr:`DepthFrame.frame_id` is the
+left camera's optical frame (the profile's left ``frame_id``, or the input's when the profile has none); the
+writers label their outputs with :func:`rectified_frame_id` of it (``cam_optical_frame`` ->
+``cam_rect_optical_frame``) and publish that frame on ``/tf_static``, turned from the optical one by the
+rectification's R1 (stereo_image_proc labels its outputs with the optical frame itself and leaves R1 out).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from s2r.recordings.frames import StereoFrame
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
 
-__all__ = ["SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids"]
+__all__ = ["SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids", "rectified_frame_id"]
 
 log = logging.getLogger(__name__)
 
@@ -49,7 +52,8 @@ class DepthFrame:
         index, name, source: the input frame's (see :class:`s2r.recordings.StereoFrame`).
         stamp_ns: the input left image's stamp in nanoseconds, or a synthesized one (``stamp_synthesized``).
         stamp_synthesized: True when the input had no time (still files).
-        frame_id: the frame every output of this frame is labelled with (never empty).
+        frame_id: the left camera's optical frame (never empty); outputs are labelled with
+            :func:`rectified_frame_id` of it.
         result: the depth, in the rectified left camera's grid and frame.
     """
 
@@ -72,6 +76,17 @@ def frame_ids(profile_left: str, profile_right: str, input_frame_id: str, profil
         log.warning("neither the profile nor the recording names a frame_id: the outputs use %r", left)
     right = profile_right or (left.replace("left", "right") if "left" in left else f"{left}_right")
     return left, right
+
+
+def rectified_frame_id(optical: str) -> str:
+    """The frame of the rectified left camera beside the optical frame ``optical``, named after REP 103's
+    ``_optical`` suffix: ``cam_optical_frame`` -> ``cam_rect_optical_frame``, ``cam_optical`` ->
+    ``cam_rect_optical``, any other ``cam`` -> ``cam_rect``. Its axes are the optical frame's turned by the
+    rectification's R1 (``X_rect = R1 X_optical``), the same origin."""
+    for suffix in ("_optical_frame", "_optical"):
+        if optical.endswith(suffix):
+            return optical[: -len(suffix)] + "_rect" + suffix
+    return optical + "_rect"
 
 
 def _stamp(frame: StereoFrame, previous: int | None) -> tuple[int, bool]:

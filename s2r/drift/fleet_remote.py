@@ -16,7 +16,7 @@ from urllib.parse import unquote, urlsplit
 
 from s2r.calib import find_stereo_pairs
 from s2r.calib.detect.inputs import CAMERA_SUBFOLDERS, IMAGE_SUFFIXES
-from s2r.drift.source import StereoSource, _spread
+from s2r.drift.source import StereoSource, spread
 from s2r.errors import CalibrationError, CheckError
 from s2r.imageio import MAX_IMAGE_FILE_BYTES
 from s2r.recordings.remote import RemoteError, copy_to, join, list_folder
@@ -72,7 +72,7 @@ def _fetch_folder(recording: RemoteRecording, into: Path) -> StereoSource:
     except CalibrationError as exc:  # names the stand-in folder: name the URL instead
         raise CheckError(exc.message, path=recording.url, hint=exc.hint) from None
     keep = set()
-    for k in _spread(len(pairs.names), recording.max_frames):
+    for k in spread(len(pairs.names), recording.max_frames):
         for local in (pairs.left[k], pairs.right[k]):
             copy_to(join(recording.url, *_relative(local, into)), local, limit=MAX_IMAGE_FILE_BYTES)
             keep.add(local)

@@ -9,8 +9,7 @@ memory stays bounded), and every image's declared size is checked against the pr
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -21,51 +20,54 @@ from s2r.profile import StereoProfile
 from s2r.recordings import RecordingSpec, open_recording
 from s2r.recordings.files import FileFrames
 
-__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs"]
+__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "spread"]
 
 GreyPair = tuple[str, NDArray[np.uint8], NDArray[np.uint8]]
 #: Expected (width, height) px of the left and the right images, or None for any size.
 Sizes = tuple[tuple[int, int], tuple[int, int]] | None
 
 
-@dataclass(frozen=True)
-class StereoSource:
-    """One recording: ``folder``, or ``left_glob`` + ``right_glob``, or ``bag`` + ``left_topic`` + ``right_topic``, or
-    ``video`` (+ ``layout``), or ``left_video`` + ``right_video``; ``every``-th frame, ``max_frames`` spread."""
+#: The recording fields a :class:`StereoSource` reads through to its :class:`RecordingSpec`.
+_SPEC_FIELDS = frozenset(f.name for f in fields(RecordingSpec))
 
-    folder: Path | None = None
-    left_glob: str | None = None
-    right_glob: str | None = None
-    bag: Path | None = None
-    left_topic: str | None = None
-    right_topic: str | None = None
+
+@dataclass(frozen=True, init=False)
+class StereoSource:
+    """One recording (a :class:`~s2r.recordings.RecordingSpec`: a folder, two globs, a bag and two topics, a video
+    or two) and how many pairs a check uses, ``max_frames``, spread over it.
+
+    ``StereoSource(folder=...)``, ``StereoSource(bag=..., left_topic=..., right_topic=..., max_frames=8)`` or
+    ``StereoSource(spec, max_frames=8)``; the spec's fields read through (``source.folder``). It pickles as the
+    spec and the number (a fleet sends it to Dask workers).
+    """
+
+    recording: RecordingSpec
     max_frames: int = 20
-    video: Path | None = None
-    layout: str = "sbs"
-    left_video: Path | None = None
-    right_video: Path | None = None
-    every: int = 1
-    max_dt_s: float = 0.01
+
+    def __init__(self, recording: RecordingSpec | None = None, *, max_frames: int = 20, **forms: Any) -> None:
+        spec = recording if recording is not None else RecordingSpec()
+        # the spread is this module's: the spec reads every frame (its own max_frames stays None)
+        object.__setattr__(self, "recording", spec.replace(**forms, max_frames=None))
+        object.__setattr__(self, "max_frames", max_frames)
+
+    def __getattr__(self, name: str) -> Any:
+        if name in _SPEC_FIELDS and "recording" in self.__dict__:
+            return getattr(self.__dict__["recording"], name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def spec(self) -> RecordingSpec:
         """The recording as a :class:`~s2r.recordings.RecordingSpec` (all frames: the spread is this module's)."""
-        return RecordingSpec(folder=self.folder, left_glob=self.left_glob, right_glob=self.right_glob, bag=self.bag,
-                             left_topic=self.left_topic, right_topic=self.right_topic, max_dt_s=self.max_dt_s,
-                             video=self.video, layout=self.layout, left_video=self.left_video,
-                             right_video=self.right_video, every=self.every)
+        return self.recording
 
     def describe(self) -> str:
         """The recording in one phrase, for reports."""
-        if self.bag is not None:
-            return f"{self.bag} ({self.left_topic}, {self.right_topic})"
-        if self.folder is not None:
-            return str(self.folder)
-        if self.left_glob is not None or self.right_glob is not None:
-            return f"{self.left_glob} + {self.right_glob}"
-        return self.spec().describe()
+        r = self.recording
+        if r.kind == "bag":
+            return f"{r.bag} ({r.left_topic}, {r.right_topic})"
+        return r.describe()
 
 
-def _spread(count: int, limit: int) -> list[int]:
+def spread(count: int, limit: int) -> list[int]:
     """``limit`` indices spread evenly over ``count`` items (all of them when there are fewer)."""
     if count <= limit:
         return list(range(count))
@@ -97,9 +99,9 @@ def read_pairs(source: StereoSource, *, sizes: Sizes = None) -> Iterator[GreyPai
     """
     if source.max_frames < 1:
         raise CheckError(f"must be at least 1, got {source.max_frames}", field="--max-frames", hint="e.g. 20")
-    recording = open_recording(source.spec(), expected_size=sizes, grey=True, error=CheckError)
+    recording = open_recording(source.recording, expected_size=sizes, grey=True, error=CheckError)
     if isinstance(recording, FileFrames):
-        recording.indices = tuple(_spread(len(recording), source.max_frames))
+        recording.indices = tuple(spread(len(recording), source.max_frames))
         return ((f.name, f.left, f.right) for f in recording.frames())
     return _spread_stream(recording.frames(), source)
 
@@ -109,7 +111,7 @@ def _spread_stream(frames: Iterator[Any], source: StereoSource) -> Iterator[Grey
     if not kept:
         raise CheckError("no stereo pairs in the recording", path=source.describe(),
                          hint="check --left-topic and --right-topic (bags) or the video")
-    for k in _spread(len(kept), source.max_frames):
+    for k in spread(len(kept), source.max_frames):
         yield kept[k]
 
 

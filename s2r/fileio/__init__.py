@@ -4,7 +4,8 @@ content hashes for provenance. Parsing YAML and XML is :mod:`s2r.safeparse`.
 Layout (imports run one way, tests/test_import_graph.py):
 
 - :mod:`s2r.fileio.reading` -- bounded reads of regular files, ``.npy`` without pickles, sha256 of a file.
-- :mod:`s2r.fileio.outputs` -- where s2r may write: output files and folders checked, new folders remembered.
+- :mod:`s2r.fileio.outputs` -- where s2r may write: output files and folders checked, new folders remembered,
+  a folder replaced under ``--force`` restored on failure, never one holding an input (``protect_inputs``).
 - :mod:`s2r.fileio.atomic` -- atomic writes, one file or a batch published all or none (imports ``outputs``).
 
 Every public name is importable from ``s2r.fileio`` itself. Low in the layers: imports :mod:`s2r.errors` only.
@@ -15,7 +16,9 @@ from s2r.fileio.outputs import (
     TEMP_PREFIX,
     check_output_dir,
     check_output_free,
+    discard_on_failure,
     prepare_output_dir,
+    protect_inputs,
     removing_new_folders_on_failure,
 )
 from s2r.fileio.reading import (
@@ -40,8 +43,10 @@ __all__ = [
     "atomic_write_text",
     "check_output_dir",
     "check_output_free",
+    "discard_on_failure",
     "npy_bytes",
     "prepare_output_dir",
+    "protect_inputs",
     "read_file_head",
     "read_npy",
     "read_regular_file",

@@ -1,6 +1,7 @@
 """Where s2r may write: output files and folders checked before anything is written (no symlink, folder, device,
 FIFO or socket where a file goes; no silent overwrite), folders created on the way remembered so a failed run
-removes them again. Writing itself is :mod:`s2r.fileio.atomic`."""
+removes them again, an output folder replaced with ``--force`` restored when the run fails, and never one that
+holds an input of the command. Writing itself is :mod:`s2r.fileio.atomic`."""
 
 from __future__ import annotations
 
@@ -12,11 +13,21 @@ from pathlib import Path
 
 from s2r.errors import OutputExistsError, S2RError
 
-__all__ = ["TEMP_PREFIX", "check_output_dir", "check_output_free", "prepare_output_dir",
-           "removing_new_folders_on_failure"]
+__all__ = ["TEMP_PREFIX", "check_output_dir", "check_output_free", "discard_on_failure", "prepare_output_dir",
+           "protect_inputs", "removing_new_folders_on_failure"]
 
-#: Folders created by this process, one list per active :func:`removing_new_folders_on_failure` block.
-_NEW_FOLDERS: list[list[Path]] = []
+
+class _FailureUndo:
+    """What one :func:`removing_new_folders_on_failure` block undoes on failure, or finishes on success."""
+
+    def __init__(self) -> None:
+        self.made: list[Path] = []  # new folders: removed when still empty
+        self.trees: list[Path] = []  # folders this run created and filled (a cache): removed whole
+        self.replaced: list[tuple[Path, Path]] = []  # (output folder, the old one moved aside beside it)
+
+
+#: One entry per active :func:`removing_new_folders_on_failure` block, innermost last.
+_NEW_FOLDERS: list[_FailureUndo] = []
 
 
 @contextlib.contextmanager
@@ -24,18 +35,48 @@ def removing_new_folders_on_failure() -> Iterator[None]:
     """Within the block, output folders created here (:func:`prepare_output_dir`, an :class:`OutputBatch`'s
     subfolders) are remembered; when the block ends with an exception (bad input found after ``-o DIR`` was
     prepared, Ctrl-C, SIGTERM), those still empty are removed again, deepest first, so a refused run leaves
-    nothing behind and its rerun is not refused. The CLI runs every command inside one."""
-    made: list[Path] = []
-    _NEW_FOLDERS.append(made)
+    nothing behind and its rerun is not refused; folders given to :func:`discard_on_failure` are removed whole.
+    An output folder replaced with ``--force`` (:func:`prepare_output_dir`) is restored: the new one is removed
+    and the old one moved back; when the block ends normally the old one is removed. The CLI runs every command
+    inside one."""
+    undo = _FailureUndo()
+    _NEW_FOLDERS.append(undo)
     try:
         yield
     except BaseException:
-        for folder in reversed(made):
+        for tree in reversed(undo.trees):
+            _remove_tree(tree)
+        for folder in reversed(undo.made):
             with contextlib.suppress(OSError):
                 folder.rmdir()  # only an empty folder: published files keep theirs
+        for out, old in reversed(undo.replaced):
+            _remove_tree(out)
+            with contextlib.suppress(OSError):
+                os.rename(old, out)
         raise
+    else:
+        for _, old in undo.replaced:
+            _remove_tree(old)
     finally:
-        _NEW_FOLDERS.remove(made)
+        _NEW_FOLDERS.remove(undo)
+
+
+def discard_on_failure(folder: str | Path) -> None:
+    """Remove ``folder`` whole (it must be one this run creates, such as a cache) if the enclosing
+    :func:`removing_new_folders_on_failure` block fails: a failed run leaves nothing it created."""
+    if _NEW_FOLDERS:
+        _NEW_FOLDERS[-1].trees.append(Path(folder))
+
+
+def _remove_tree(path: Path) -> None:
+    """Remove ``path`` and everything below it (a link is removed, never followed); quiet when it is gone."""
+    import shutil
+
+    with contextlib.suppress(OSError):
+        if path.is_symlink() or not path.is_dir():
+            path.unlink()
+        else:
+            shutil.rmtree(path)
 
 
 def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
@@ -44,7 +85,7 @@ def _make_folders(folder: Path, *, exist_ok: bool = True) -> None:
     missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
     folder.mkdir(parents=True, exist_ok=exist_ok)
     if _NEW_FOLDERS:
-        _NEW_FOLDERS[-1].extend(reversed(missing))
+        _NEW_FOLDERS[-1].made.extend(reversed(missing))
 
 
 def _lstat(path: Path) -> os.stat_result | None:
@@ -162,14 +203,25 @@ def check_output_dir(path: str | Path, *, force: bool) -> Path:
     return out
 
 
-def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
+def prepare_output_dir(path: str | Path, *, force: bool, replace: bool = True) -> Path:
     """Create ``path`` as an output folder after :func:`check_output_dir`; it must end up writable.
 
     Without ``force`` a folder that did not exist is created exclusively: when another run creates it between
-    the check and the ``mkdir``, this one stops instead of sharing it.
+    the check and the ``mkdir``, this one stops instead of sharing it. With ``force`` (and ``replace``) a folder
+    that holds anything is REPLACED whole, never merged with (an old frame or bag file would stay beside the new
+    ones): it is moved aside (renamed to a ``.s2r-tmp-`` name beside it, the same filesystem) and a new empty
+    folder takes its name; inside a :func:`removing_new_folders_on_failure` block (every CLI command) the old
+    one is removed only when the command has succeeded, and moved back when it fails; outside a block it is
+    removed at once. The working folder, the home folder or a filesystem root is never replaced.
+    ``replace=False`` writes named files into an existing folder that s2r does not own (``force`` then only
+    lets them be overwritten).
     """
     out = check_output_dir(path, force=force)
-    existed = _lstat(out) is not None
+    st = _lstat(out)
+    if force and replace and st is not None and any(out.iterdir()):
+        _move_aside(out)
+        st = None
+    existed = st is not None
     try:
         _make_folders(out.parent)
         _make_folders(out, exist_ok=force or existed)
@@ -181,3 +233,54 @@ def prepare_output_dir(path: str | Path, *, force: bool) -> Path:
     if not os.access(out, os.W_OK):
         raise S2RError("folder is not writable", path=out, hint="choose a writable location")
     return out
+
+
+#: Paths the running command was given (its inputs, see :func:`protect_inputs`): a folder holding one is never
+#: replaced whole.
+_INPUTS: list[Path] = []
+
+
+def protect_inputs(paths: list[str | os.PathLike[str]]) -> None:
+    """Remember the paths a command was given (files, folders, the folder part of a glob): ``--force`` then never
+    replaces an output folder that holds one of them (``-o data --force`` with ``--left-dir data/left`` would
+    remove the recording). The CLI calls it with every path among a command's arguments."""
+    _INPUTS.clear()
+    for given in paths:
+        text = str(given)
+        parts = Path(text).parts
+        magic = next((k for k, part in enumerate(parts) if any(c in part for c in "*?[")), len(parts))
+        if magic < len(parts):  # a glob: its folder part
+            text = str(Path(*parts[:magic])) if magic else "."
+        if text and os.path.lexists(text):
+            _INPUTS.append(Path(text))
+
+
+def _move_aside(out: Path) -> None:
+    """Rename the output folder ``out`` to a new ``.s2r-tmp-NAME.*.old`` folder beside it (see
+    :func:`prepare_output_dir`); refuse one whose removal would take more than an output with it."""
+    import tempfile
+
+    resolved = out.resolve()
+    guarded = {Path.home().resolve(), Path.cwd().resolve()}
+    if resolved in guarded or resolved == Path(resolved.anchor) or resolved in Path.cwd().resolve().parents:
+        raise OutputExistsError("is the working folder, the home folder, a parent of the working folder or a "
+                                "filesystem root: --force would replace it whole; nothing was written", path=out,
+                                hint="give a folder of its own to the output, e.g. -o out/depth")
+    held = next((p for p in _INPUTS if resolved in p.resolve().parents), None)
+    if held is not None:
+        raise OutputExistsError(f"holds {held}, an input of this command: --force would replace the folder whole; "
+                                "nothing was written", path=out, hint="write the output to a folder of its own")
+    old = ""
+    try:
+        old = tempfile.mkdtemp(prefix=f"{TEMP_PREFIX}{out.name[:96]}.", suffix=".old", dir=out.parent)
+        os.rename(out, old)  # onto the new empty folder: one atomic rename
+    except OSError as exc:
+        if old:
+            with contextlib.suppress(OSError):
+                os.rmdir(old)
+        raise S2RError(f"cannot replace the output folder: {exc.strerror}; nothing was changed", path=out,
+                       hint="check the permissions of its parent folder") from None
+    if _NEW_FOLDERS:
+        _NEW_FOLDERS[-1].replaced.append((out, Path(old)))
+    else:
+        _remove_tree(Path(old))

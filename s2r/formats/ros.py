@@ -152,7 +152,7 @@ def dump_ros_pair(
     texts.update(extra or {})
     for name in texts:
         check_output_free(out / name, force=force)
-    prepare_output_dir(out, force=True)
+    prepare_output_dir(out, force=True, replace=False)  # a folder of the user's: only the named files
     with OutputBatch(force=force, root=out) as batch:
         for name, text in texts.items():
             batch.add_text(out / name, text)

@@ -149,27 +149,35 @@ def _messages(reader: Any, topics: tuple[str, str]) -> Iterator[BagMessage]:
                          str(getattr(msg.header, "frame_id", "")))
 
 
-def paired_messages(reader: Any, left_topic: str, right_topic: str, *, max_dt_s: float = 0.01
-                    ) -> Iterator[tuple[BagMessage, BagMessage]]:
+def paired_messages(reader: Any, left_topic: str, right_topic: str, *, max_dt_s: float = 0.01,
+                    unpaired: list[str] | None = None) -> Iterator[tuple[BagMessage, BagMessage]]:
     """Yield (left, right) messages whose header stamps differ by at most ``max_dt_s``, not decoded.
 
-    Messages are buffered only until a partner arrives or a newer message makes one impossible.
+    Messages are buffered only until a partner arrives or a newer message makes one impossible; each message left
+    without a partner is appended to ``unpaired`` as ``TOPIC @ STAMP ns`` (those still buffered when the bag ends
+    too, when it is read to the end).
     """
     max_dt_ns = round(max_dt_s * 1e9)
     buffers: dict[str, deque[BagMessage]] = {left_topic: deque(), right_topic: deque()}
     other = {left_topic: right_topic, right_topic: left_topic}
+    dropped = unpaired if unpaired is not None else []
     for message in _messages(reader, (left_topic, right_topic)):
         partners = buffers[other[message.topic]]
         while partners and partners[0].stamp_ns < message.stamp_ns - max_dt_ns:
-            partners.popleft()
+            dropped.append(_named(partners.popleft()))
         match = next((p for p in partners if abs(p.stamp_ns - message.stamp_ns) <= max_dt_ns), None)
         if match is None:
             buffers[message.topic].append(message)
             continue
         while partners and partners[0] is not match:
-            partners.popleft()
+            dropped.append(_named(partners.popleft()))
         partners.popleft()
         yield (message, match) if message.topic == left_topic else (match, message)
+    dropped.extend(sorted((_named(m) for q in buffers.values() for m in q), key=lambda n: int(n.split()[-2])))
+
+
+def _named(message: BagMessage) -> str:
+    return f"{message.topic} @ {message.stamp_ns} ns"
 
 
 def grey_of(message: BagMessage, *, rule: SizeRule | None = None, side: str = "left",

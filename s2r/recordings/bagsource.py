@@ -14,7 +14,7 @@ from typing import Any
 from s2r.errors import S2RError
 from s2r.recordings.bags import BagMessage, check_image_topics, grey_of, image_from_message, open_bag, paired_messages
 from s2r.recordings.decode import SizeRule, to_uint8
-from s2r.recordings.frames import StereoFrame
+from s2r.recordings.frames import StereoFrame, thinned
 
 __all__ = ["BagFrames"]
 
@@ -35,6 +35,8 @@ class BagFrames:
 
     def __post_init__(self) -> None:
         self.bag = Path(self.bag)
+        #: Messages without a partner within ``max_dt_s`` (``TOPIC @ STAMP ns``), skipped; filled as frames are read.
+        self.skipped: list[str] = []
         reader = self._open()
         reader.close()
 
@@ -72,15 +74,12 @@ class BagFrames:
         """``(index, left, right)`` undecoded message pairs after ``every`` / ``max_frames`` (the corner cache keys
         on their sha256); a bag failing while read raises the rule's error."""
         reader = self._open()
-        kept = 0
+        self.skipped = []
         try:
-            pairs = paired_messages(reader, self.left_topic, self.right_topic, max_dt_s=self.max_dt_s)
-            for index, (left, right) in enumerate(_guarded(pairs, self.bag, self.rule.error)):
-                if index % self.every:
-                    continue
-                if self.max_frames is not None and kept >= self.max_frames:
-                    return
-                kept += 1
+            pairs = paired_messages(reader, self.left_topic, self.right_topic, max_dt_s=self.max_dt_s,
+                                    unpaired=self.skipped)
+            for index, (left, right) in thinned(_guarded(pairs, self.bag, self.rule.error), self.every,
+                                                self.max_frames):
                 yield index, left, right
         finally:
             reader.close()

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from s2r.errors import CalibrationError
 from s2r.imageio import decode_image_file
 from s2r.recordings.decode import SizeRule, to_uint8
-from s2r.recordings.frames import StereoFrame
+from s2r.recordings.frames import StereoFrame, thinned
 from s2r.recordings.pairing import PairSet, find_stereo_pairs
 
 __all__ = ["FileFrames", "decode_side"]
@@ -67,6 +67,11 @@ class FileFrames:
                                   hint="give each left image a right partner with the same number")
         return pairs
 
+    @property
+    def skipped(self) -> list[str]:
+        """Image files without a partner (skipped), as found when this source was made."""
+        return [str(p) for p in self.pairs.unpaired]
+
     def __len__(self) -> int:
         """Pairs this source yields (after ``every`` and ``max_frames``)."""
         n = len(range(0, len(self.pairs.names), self.every))
@@ -80,7 +85,7 @@ class FileFrames:
 
     def frames(self) -> Iterator[StereoFrame]:
         """Decoded pairs in pairing order (by the number in the names), one at a time."""
-        positions = range(0, len(self.pairs.names), self.every)[:len(self)]
+        positions = [k for k, _ in thinned(range(len(self.pairs.names)), self.every, self.max_frames)]
         for k in positions if self.indices is None else [positions[i] for i in self.indices]:
             lp, rp = self.pairs.left[k], self.pairs.right[k]
             yield StereoFrame(index=k, name=self.pairs.names[k], stamp_ns=None, frame_id="",

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FrameSource", "StereoFrame"]
+__all__ = ["FrameSource", "StereoFrame", "skipped_inputs", "thinned"]
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -21,7 +23,8 @@ class StereoFrame:
             thin it (so outputs can be traced back to the input).
         name: a file-name-safe stem naming the frame: the left image's file stem for files, the left stamp in
             nanoseconds for bags (``1700000000123456789``), ``frame_000123`` for videos.
-        stamp_ns: the left image's time in nanoseconds: the header stamp for bags, frame index / fps for videos,
+        stamp_ns: the left image's time in nanoseconds: the header stamp for bags, the video's start plus the
+            frame's time in it for videos (:mod:`s2r.recordings.video`),
             None for still files.
         frame_id: the left image's ROS frame_id as recorded ('' when the input has none).
         left: left image, uint8, H x W (grey) or H x W x 3 (BGR).
@@ -49,3 +52,27 @@ class FrameSource(Protocol):
     def describe(self) -> str:
         """One line naming the recording for summaries (``folder rec/ (24 pairs)``, ``bag run.bag``)."""
         ...
+
+
+def skipped_inputs(source: object) -> list[str]:
+    """The inputs ``source`` skipped for want of a partner (image files, ``TOPIC @ STAMP ns`` bag messages), as
+    its ``skipped`` attribute lists them once it has been read; [] for a source that skips none."""
+    return list(getattr(source, "skipped", ()))
+
+
+def thinned(items: Iterable[T], every: int = 1, max_frames: int | None = None) -> Iterator[tuple[int, T]]:
+    """``(index, item)`` of every ``every``-th item (``index`` counted in ``items``, from 0), at most ``max_frames``
+    of them (None: all): the ``--every`` / ``--max-frames`` rule of every recording form.
+
+    ``items`` is advanced lazily and never past the last item kept, so a source can yield cheap positions (a
+    grabbed video frame, an undecoded bag message) and decode only those this yields."""
+    if max_frames is not None and max_frames < 1:
+        return
+    kept = 0
+    for index, item in enumerate(items):
+        if index % every:
+            continue
+        yield index, item
+        kept += 1
+        if max_frames is not None and kept >= max_frames:
+            return

@@ -29,7 +29,7 @@ from s2r.formats.realsense.facts import DEPTH_STREAM, LEFT_STREAM, RIGHT_STREAM,
 from s2r.formats.realsense.recording import open_messages, read_recording
 from s2r.imageio import _native_stderr_silenced, declared_size, oversize_reason
 from s2r.limits import MAX_IMAGE_PX, MIN_IMAGE_PX
-from s2r.recordings.frames import StereoFrame
+from s2r.recordings.frames import StereoFrame, thinned
 
 __all__ = ["RealSenseFrames", "RealSenseTopics", "find_realsense_topics"]
 
@@ -173,17 +173,10 @@ class RealSenseFrames:
         sizes = {side: _expected_size(s, facts.path) for side, s in streams.items()}
         fps = max(streams["left"].fps, streams["right"].fps) or 30.0
         tolerance_ns = int(0.5e9 / fps)
-        index = kept = 0
         with open_messages(facts) as messages:
-            for left, right, rule in self._pairs(messages, sides, streams, tolerance_ns):
-                self.paired_by[rule] += 1
-                index += 1
-                if (index - 1) % self.every:
-                    continue
-                if self.max_frames is not None and kept >= self.max_frames:
-                    break
-                kept += 1
-                yield self._frame(messages, index - 1, left, right, sizes)
+            for index, (left, right) in thinned(self._pairs(messages, sides, streams, tolerance_ns), self.every,
+                                                self.max_frames):
+                yield self._frame(messages, index, left, right, sizes)
         if self.unpaired:
             log.warning("%s: %d infrared images had no partner (dropped frames) and were skipped", facts.path,
                         self.unpaired)
@@ -207,7 +200,9 @@ class RealSenseFrames:
                            source=f"realsense {self.path.name}{number} @ {stamps[0]} ns")
 
     def _pairs(self, messages: Any, sides: dict[str, str], streams: dict[str, StreamFacts], tolerance_ns: int
-               ) -> Iterator[tuple[_Pending, _Pending, str]]:
+               ) -> Iterator[tuple[_Pending, _Pending]]:
+        """(left, right) image rows paired by frame number or nearest stamp, counted in ``paired_by`` by rule;
+        images left without a partner are counted in ``unpaired``."""
         queues: dict[str, deque[_Pending]] = {"left": deque(), "right": deque()}
         for side, item in _numbered(messages, sides, streams):
             other = queues["right" if side == "left" else "left"]
@@ -222,7 +217,8 @@ class RealSenseFrames:
                 other.popleft()
                 self.unpaired += 1
             other.popleft()
-            yield (item, match, rule) if side == "left" else (match, item, rule)
+            self.paired_by[rule] += 1
+            yield (item, match) if side == "left" else (match, item)
         self.unpaired += len(queues["left"]) + len(queues["right"])
 
 

@@ -14,6 +14,8 @@ Forms (exactly one):
 - ``left_video`` + ``right_video``: two videos paired by frame index.
 
 ``every`` keeps every N-th frame (counted in the recording), ``max_frames`` stops after that many kept frames.
+``start_ns`` (videos only): when the video began, ns since the Unix epoch, the base of its frames' stamps (default
+the video file's modification time; see :mod:`s2r.recordings.video`).
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ class RecordingSpec:
     right_video: Path | None = None
     every: int = 1
     max_frames: int | None = None
+    start_ns: int | None = None
 
     @property
     def kind(self) -> str:
@@ -79,6 +82,12 @@ class RecordingSpec:
             raise error(f"must be at least 1, got {self.every}", field="--every", hint="e.g. --every 5")
         if self.max_frames is not None and self.max_frames < 1:
             raise error(f"must be at least 1, got {self.max_frames}", field="--max-frames", hint="e.g. 20")
+        if self.start_ns is not None and given[0] not in ("video", "videos"):
+            raise error("applies to videos only (bags carry their own stamps, still files none)", field="--start-stamp",
+                        hint="drop --start-stamp")
+        if self.start_ns is not None and self.start_ns <= 0:
+            raise error(f"must be after the Unix epoch, got {self.start_ns} ns", field="--start-stamp",
+                        hint="e.g. --start-stamp 2024-05-01T12:00:00Z or 1714564800.0")
         if not 0 < self.max_dt_s < float("inf"):
             raise error(f"must be positive seconds, got {self.max_dt_s}", field="--max-dt", hint="e.g. 0.01")
         return self
@@ -129,12 +138,13 @@ def open_recording(spec: RecordingSpec | None = None, *, expected_size: Expected
     if spec.kind == "video":
         from s2r.recordings.video import VideoFrames
 
-        return VideoFrames(Path(str(spec.video)), spec.layout, rule=rule, grey=grey, every=every, max_frames=limit)
+        return VideoFrames(Path(str(spec.video)), spec.layout, rule=rule, grey=grey, every=every, max_frames=limit,
+                           start_ns=spec.start_ns)
     if spec.kind == "videos":
         from s2r.recordings.video import TwoVideoFrames
 
         return TwoVideoFrames(Path(str(spec.left_video)), Path(str(spec.right_video)), rule=rule, grey=grey,
-                              every=every, max_frames=limit)
+                              every=every, max_frames=limit, start_ns=spec.start_ns)
     from s2r.recordings.files import FileFrames
 
     folder = None if spec.folder is None else Path(spec.folder)

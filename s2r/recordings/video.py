@@ -7,9 +7,16 @@ streamed one frame at a time, never the whole video in memory.
 
 The size a video declares (``CAP_PROP_FRAME_WIDTH`` / ``CAP_PROP_FRAME_HEIGHT``) is checked against the expected
 camera size and the pixel limit before the first frame is decoded, and every decoded frame must have it. Skipped
-frames (``every``) are only grabbed, not converted. Frames are named ``frame_000123`` (0-based index in the file) and
-stamped index / fps. A video that ends before the frame count its container states is refused as truncated; one
-without a frame is refused as empty.
+frames (``every``) are only grabbed, not converted. Frames are named ``frame_000123`` (0-based index in the file).
+
+Stamps: a video holds times from its own start only (its frames' presentation times, ``CAP_PROP_POS_MSEC``; index /
+fps when the container gives none), and ROS reads a stamp of 0 as "unset". Each frame is stamped ``start +`` its
+time in the video, where ``start`` is the ``start_ns`` given (``--start-stamp``: when the recording began) or else
+the file's modification time (a camera or phone writes the file as it records; a copy made without keeping times
+moves it). The left video's times pair two videos.
+
+A video that ends before the frame count its container states is refused as truncated; one without a frame is
+refused as empty.
 """
 
 from __future__ import annotations
@@ -28,7 +35,7 @@ from numpy.typing import NDArray
 from s2r.errors import S2RError
 from s2r.imageio import native_stderr_silenced
 from s2r.recordings.decode import SizeRule, to_uint8
-from s2r.recordings.frames import StereoFrame
+from s2r.recordings.frames import StereoFrame, thinned
 
 __all__ = ["LAYOUTS", "TwoVideoFrames", "VideoFrames"]
 
@@ -57,6 +64,7 @@ class _Capture:
                         path=self.path, field=option, hint=_HINT)
         if info.st_size == 0:
             raise error("the video file is empty", path=self.path, field=option, hint=_HINT)
+        self.mtime_ns = info.st_mtime_ns
         with native_stderr_silenced():  # FFmpeg's own lines ("moov atom not found"): s2r says it in one line
             self.cap = cv2.VideoCapture(str(self.path), cv2.CAP_FFMPEG)
         if not self.cap.isOpened():
@@ -73,9 +81,18 @@ class _Capture:
             raise error("the video declares no frame size (no video stream)", path=self.path, field=option,
                         hint=_HINT)
 
-    def stamp_ns(self, index: int) -> int | None:
-        """Frame ``index``'s time from the start (ns) at the declared fps; None when the fps is unknown."""
-        return round(index * 1e9 / self.fps) if self.fps > 0 and np.isfinite(self.fps) else None
+    def stamp_ns(self, index: int, start_ns: int | None) -> int:
+        """The stamp (ns since the Unix epoch) of frame ``index``, the one last grabbed: ``start_ns`` (default the
+        file's modification time) plus the frame's presentation time in the video (index / fps when the container
+        gives none; 0 when neither is known)."""
+        msec = float(self.cap.get(cv2.CAP_PROP_POS_MSEC))
+        if np.isfinite(msec) and msec >= 0 and (msec > 0 or index == 0):
+            offset = round(msec * 1e6)
+        elif self.fps > 0 and np.isfinite(self.fps):
+            offset = round(index * 1e9 / self.fps)
+        else:
+            offset = 0
+        return (self.mtime_ns if start_ns is None else start_ns) + offset
 
     def grab(self, read: int) -> bool:
         """Advance one frame; False at the end. An end before the declared count (less one, as containers round
@@ -107,6 +124,14 @@ class _Capture:
         self.cap.release()
 
 
+def _grabbed(cap: _Capture) -> Iterator[int]:
+    """Grab the video's frames one at a time (not converted), yielding each one's index."""
+    index = 0
+    while cap.grab(index):
+        yield index
+        index += 1
+
+
 def _halves(frame: NDArray[Any], layout: str) -> tuple[NDArray[Any], NDArray[Any]]:
     if layout == "sbs":
         half = frame.shape[1] // 2
@@ -117,7 +142,8 @@ def _halves(frame: NDArray[Any], layout: str) -> tuple[NDArray[Any], NDArray[Any
 
 @dataclass
 class VideoFrames:
-    """One video holding both images in ``layout`` ('sbs' or 'tb'); ``every``-th frame, at most ``max_frames``."""
+    """One video holding both images in ``layout`` ('sbs' or 'tb'); ``every``-th frame, at most ``max_frames``;
+    ``start_ns``: the stamp of the video's start, ns since the Unix epoch (default the file's modification time)."""
 
     video: Path
     layout: str = "sbs"
@@ -125,6 +151,7 @@ class VideoFrames:
     grey: bool = False
     every: int = 1
     max_frames: int | None = None
+    start_ns: int | None = None
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
@@ -157,22 +184,19 @@ class VideoFrames:
         """Decoded frames split into left and right, one at a time."""
         cap = self._open()
         try:
-            index = kept = 0
-            while (self.max_frames is None or kept < self.max_frames) and cap.grab(index):
-                if index % self.every == 0:
-                    left, right = _halves(cap.retrieve(index), self.layout)
-                    kept += 1
-                    yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=cap.stamp_ns(index),
-                                      frame_id="", left=to_uint8(left, grey=self.grey),
-                                      right=to_uint8(right, grey=self.grey), source=f"video {self.video} frame {index}")
-                index += 1
+            for index, _ in thinned(_grabbed(cap), self.every, self.max_frames):
+                left, right = _halves(cap.retrieve(index), self.layout)
+                yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=cap.stamp_ns(index, self.start_ns),
+                                  frame_id="", left=to_uint8(left, grey=self.grey),
+                                  right=to_uint8(right, grey=self.grey), source=f"video {self.video} frame {index}")
         finally:
             cap.release()
 
 
 @dataclass
 class TwoVideoFrames:
-    """A left and a right video paired by frame index; ``every``-th frame, at most ``max_frames``."""
+    """A left and a right video paired by frame index; ``every``-th frame, at most ``max_frames``; ``start_ns`` as
+    :class:`VideoFrames` (default the left file's modification time)."""
 
     left_video: Path
     right_video: Path
@@ -180,6 +204,7 @@ class TwoVideoFrames:
     grey: bool = False
     every: int = 1
     max_frames: int | None = None
+    start_ns: int | None = None
 
     def __post_init__(self) -> None:
         for cap in self._open():
@@ -216,21 +241,24 @@ class TwoVideoFrames:
         """Decoded frame pairs, one at a time; a video ending before the other is refused."""
         left, right = self._open()
         try:
-            index = kept = 0
-            while self.max_frames is None or kept < self.max_frames:
-                more_left, more_right = left.grab(index), right.grab(index)
-                if more_left != more_right:
-                    short, other = ("left", "right") if more_right else ("right", "left")
-                    raise self._mismatch(f"the {short} video ends after {index} frames but the {other} one has more")
-                if not more_left:
-                    return
-                if index % self.every == 0:
-                    kept += 1
-                    yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=left.stamp_ns(index),
-                                      frame_id="", left=to_uint8(left.retrieve(index), grey=self.grey),
-                                      right=to_uint8(right.retrieve(index), grey=self.grey),
-                                      source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}")
-                index += 1
+            for index, _ in thinned(self._grabbed_pairs(left, right), self.every, self.max_frames):
+                yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=left.stamp_ns(index, self.start_ns),
+                                  frame_id="", left=to_uint8(left.retrieve(index), grey=self.grey),
+                                  right=to_uint8(right.retrieve(index), grey=self.grey),
+                                  source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}")
         finally:
             left.release()
             right.release()
+
+    def _grabbed_pairs(self, left: _Capture, right: _Capture) -> Iterator[int]:
+        """Grab a frame of each video at a time, yielding its index; a video ending before the other is refused."""
+        index = 0
+        while True:
+            more_left, more_right = left.grab(index), right.grab(index)
+            if more_left != more_right:
+                short, other = ("left", "right") if more_right else ("right", "left")
+                raise self._mismatch(f"the {short} video ends after {index} frames but the {other} one has more")
+            if not more_left:
+                return
+            yield index
+            index += 1

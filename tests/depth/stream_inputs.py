@@ -18,6 +18,8 @@ from tests import raycast as rc
 F64 = NDArray[np.float64]
 LEFT_TOPIC, RIGHT_TOPIC = "/cam/left/image_raw", "/cam/right/image_raw"
 FRAME_ID = "raycast_left_optical"
+#: The rectified left frame every depth output is labelled with (REP 103's _optical suffix kept last).
+RECT_FRAME_ID = "raycast_left_rect_optical"
 #: Input stamps of the bag: not evenly spaced, so a synthesized stamp could not pass for them.
 STAMPS_NS = (1_700_000_000_000_000_000, 1_700_000_000_033_000_000, 1_700_000_000_071_500_000)
 

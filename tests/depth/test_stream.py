@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from s2r.cli import main
 from s2r.depth.pipeline import StereoPipeline
@@ -20,6 +21,7 @@ from s2r.recordings import StereoFrame
 from tests.depth.stream_inputs import (
     FRAME_ID,
     LEFT_TOPIC,
+    RECT_FRAME_ID,
     RIGHT_TOPIC,
     STAMPS_NS,
     KnownFrame,
@@ -81,7 +83,7 @@ def test_files_named_after_the_input_with_an_index_and_known_depth(known: dict[s
     assert main(["-q", "depth", str(known["path"]), str(known["root"] / "rec"), "-o", str(out), "--pcd"]) == 0
     rows = list(csv.DictReader((out / "frames.csv").open()))
     assert [r["name"] for r in rows] == known["names"] and [r["index"] for r in rows] == ["0", "1", "2"]
-    assert {r["stamp_source"] for r in rows} == {"synthesized"} and {r["frame_id"] for r in rows} == {FRAME_ID}
+    assert {r["stamp_source"] for r in rows} == {"synthesized"} and {r["frame_id"] for r in rows} == {RECT_FRAME_ID}
     stamps = [int(r["stamp_ns"]) for r in rows]
     assert stamps == sorted(stamps) and len(set(stamps)) == 3
     pipe = StereoPipeline(known["profile"])
@@ -127,7 +129,7 @@ def test_bag_depth_equals_files_depth_bit_for_bit(known: dict[str, Any], tmp_pat
     depths = [m for _, m in msgs["/stereo/depth/image_rect"]]
     assert [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in depths] == list(STAMPS_NS)
     assert [t for t, _ in msgs["/stereo/disparity"]] == list(STAMPS_NS)
-    assert {m.header.frame_id for topic, ms in msgs.items() if topic != "/tf_static" for _, m in ms} == {FRAME_ID}
+    assert {m.header.frame_id for topic, ms in msgs.items() if topic != "/tf_static" for _, m in ms} == {RECT_FRAME_ID}
     rect = StereoPipeline(known["profile"]).rectification
     for name, depth_msg, (_, disp_msg) in zip(known["names"], depths, msgs["/stereo/disparity"], strict=True):
         assert depth_msg.encoding == "32FC1"
@@ -144,10 +146,24 @@ def test_bag_depth_equals_files_depth_bit_for_bit(known: dict[str, Any], tmp_pat
     P = np.asarray(right_info.P if target == "ros1" else right_info.p).reshape(3, 4)
     assert P[0, 3] == pytest.approx(-rect.fx_px * rect.baseline_m)
     (tf,) = [m for _, m in msgs["/tf_static"]]
-    (transform,) = tf.transforms
+    transform, to_rect = tf.transforms
     assert transform.header.frame_id == FRAME_ID and transform.child_frame_id == "raycast_right_optical"
     t = transform.transform.translation
     np.testing.assert_allclose([t.x, t.y, t.z], -known["profile"].R.T @ known["profile"].T, atol=1e-12)
+    # the rectified frame the data are labelled with, placed in the optical one: X_left = R1^T X_rect
+    assert (to_rect.header.frame_id, to_rect.child_frame_id) == (FRAME_ID, RECT_FRAME_ID)
+    q, t = to_rect.transform.rotation, to_rect.transform.translation
+    np.testing.assert_allclose(Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix(), rect.R1.T, atol=1e-12)
+    assert (t.x, t.y, t.z) == (0.0, 0.0, 0.0)
+    # a point of the cloud (rectified frame) taken to the optical frame through tf lies on the input's ray there
+    cloud0 = msgs["/stereo/points2"][0][1]
+    xyz0 = np.frombuffer(bytes(cloud0.data), np.float32).reshape(cloud0.height, cloud0.width, 4)[..., :3]
+    v, u = np.argwhere(np.isfinite(xyz0[..., 2]))[len(np.argwhere(np.isfinite(xyz0[..., 2]))) // 2]
+    in_optical = rect.R1.T @ xyz0[v, u].astype(np.float64)
+    truth = known["frames"][0]
+    assert abs(float(truth.normal @ in_optical) - truth.offset_m) < 0.01  # on the plane, in the left optical frame
+    assert abs(float(truth.normal @ xyz0[v, u]) - truth.offset_m) > abs(float(truth.normal @ in_optical)
+                                                                        - truth.offset_m)
     cloud = msgs["/stereo/points2"][-1][1]  # the last frame, as valid and from_files
     xyz = np.frombuffer(bytes(cloud.data), np.float32).reshape(cloud.height, cloud.width, 4)[..., :3]
     np.testing.assert_allclose(xyz[..., 2][valid], from_files[valid], rtol=1e-5)
@@ -167,7 +183,7 @@ def test_ros2_bag_read_by_the_mcap_packages(known: dict[str, Any], tmp_path: Pat
         assert a.encoding == b.encoding == "16UC1"
         assert bytes(a.data) == bytes(b.data)
         assert (a.header.stamp.sec, a.header.stamp.nanosec, a.header.frame_id) == (
-            b.header.stamp.sec, b.header.stamp.nanosec, FRAME_ID)
+            b.header.stamp.sec, b.header.stamp.nanosec, RECT_FRAME_ID)
     pipe = StereoPipeline(known["profile"])
     first = next(iter(pipe.stream([_frame(known["frames"][0])])))
     mm = _image(via_mcap["/d435/depth/image_rect"][0], np.uint16)

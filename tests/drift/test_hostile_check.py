@@ -170,14 +170,11 @@ def test_a_fleet_output_is_published_whole_or_not_at_all(capsys: pytest.CaptureF
               for n in ("a", "b")]
     fleet.write_text(json.dumps({"robots": robots}))
     out = tmp_path / "out"
-    (out / "summary.json").mkdir(parents=True)  # in the way of the last-but-one file, even with --force
-    assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 2
-    assert "summary.json" in _err(capsys)
-    # no robot folder, no index.html; only the journal of the finished robots, for --resume
-    assert sorted(p.name for p in out.iterdir()) == [".s2r-fleet-journal", "summary.json"]
-    (out / "summary.json").rmdir()
+    (out / "summary.json").mkdir(parents=True)  # an old output: --force replaces the folder whole
+    (out / "old_robot").mkdir()
     assert main(["fleet", "check", str(fleet), "-o", str(out), "--force", "--workers", "1"]) == 1
     assert sorted(p.name for p in out.iterdir()) == ["a", "b", "index.html", "summary.json"]
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".s2r-tmp-")]
     assert (out / "a" / "check.json").is_file() and not (out / "a" / "check.html").exists()  # failed: no report
 
 

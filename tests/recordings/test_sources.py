@@ -58,8 +58,9 @@ def test_single_video_layouts(tmp_path: Path, layout: str, codec: str) -> None:
     video = write_cv(tmp_path / f"v{suffix}", [np.concatenate(p, axis=axis) for p in _flat_pairs(6)], codec=codec)
     src = open_recording(video=video, layout=layout, every=2, max_frames=2, expected_size=(64, 48), grey=True)
     frames = list(src.frames())
-    assert [(f.index, f.name, f.stamp_ns) for f in frames] == [(0, "frame_000000", 0),
-                                                              (2, "frame_000002", 200_000_000)]
+    start = video.stat().st_mtime_ns  # no --start-stamp: the file's modification time (never 0, ROS's "unset")
+    assert [(f.index, f.name, f.stamp_ns) for f in frames] == [(0, "frame_000000", start),
+                                                              (2, "frame_000002", start + 200_000_000)]
     assert frames[1].left.shape == frames[1].right.shape == (48, 64)
     assert abs(float(frames[1].left.mean()) - 40) < 3 and abs(float(frames[1].right.mean()) - 180) < 3
 

@@ -121,7 +121,7 @@ def test_output_folder_with_files_is_refused(rig: StereoProfile, tmp_path: Path)
     render_board_set(rig, out, views=3, supersample=1, jobs=1, force=True)
     render_board_set(rig, out, views=1, supersample=1, jobs=1, force=True)
     assert sorted(p.name for p in (out / "left").iterdir()) == ["00.png"]  # no stale views from the bigger set
-    assert (out / "keep.txt").read_text() == "mine"
+    assert not (out / "keep.txt").exists()  # --force replaces the output folder whole, never merges
 
 
 @pytest.mark.parametrize(("kwargs", "field"), [

@@ -162,11 +162,14 @@ def readbag(path, out):
 
 
 def play(path, out, namespace):
+    import tf2_ros
     from stereo_msgs.msg import DisparityImage
     from tf2_msgs.msg import TFMessage
 
     got = []
     rospy.init_node("s2r_listener", anonymous=True, disable_signals=True)
+    buffer = tf2_ros.Buffer()
+    tf2_ros.TransformListener(buffer)  # tf's own listener: what RViz and every tf consumer uses
     for topic, cls in ((f"{namespace}/depth/image_rect", Image), (f"{namespace}/disparity", DisparityImage),
                        ("/tf_static", TFMessage)):
         rospy.Subscriber(topic, cls, lambda m, t=topic: got.append((t, m, None)), queue_size=1000)
@@ -175,6 +178,22 @@ def play(path, out, namespace):
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     time.sleep(2.0)
     _summary(got, out)
+    depth = next(m for t, m, _ in got if t.endswith("depth/image_rect"))
+    lookups = {}
+    for t in got:
+        if t[1]._type == "tf2_msgs/TFMessage":
+            for tr in t[1].transforms:  # each child frame looked up in its parent, and the depth's in the parent
+                found = buffer.lookup_transform(tr.header.frame_id, tr.child_frame_id, rospy.Time(0),
+                                                rospy.Duration(5.0))
+                r = found.transform.rotation
+                lookups[tr.child_frame_id] = [found.header.frame_id, r.x, r.y, r.z, r.w]
+    with open(os.path.join(out, "summary.json"), encoding="utf-8") as handle:
+        summary = json.load(handle)
+    summary["tf_lookups"] = lookups
+    summary["depth_frame_known_to_tf"] = buffer.can_transform(
+        lookups[depth.header.frame_id][0], depth.header.frame_id, rospy.Time(0), rospy.Duration(5.0))
+    with open(os.path.join(out, "summary.json"), "w", encoding="utf-8") as handle:
+        json.dump(summary, handle)
 
 
 def main():

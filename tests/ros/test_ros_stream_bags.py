@@ -15,6 +15,7 @@ from s2r.cli import main
 from tests.depth.stream_inputs import (
     FRAME_ID,
     LEFT_TOPIC,
+    RECT_FRAME_ID,
     RIGHT_TOPIC,
     STAMPS_NS,
     known_frames,
@@ -50,11 +51,22 @@ def outputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
 def _check(out: Path, outputs: dict[str, Any], *, played: bool) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["depth_stamps"] == list(STAMPS_NS)
-    assert set(summary["frame_ids"]) == {FRAME_ID}
-    ((parent, child, x, y, z),) = summary["tf"]
+    assert set(summary["frame_ids"]) == {RECT_FRAME_ID}
+    (parent, child, x, y, z), rect = summary["tf"]
     assert (parent, child) == (FRAME_ID, "raycast_right_optical")
+    assert rect == [FRAME_ID, RECT_FRAME_ID, 0.0, 0.0, 0.0]  # the rectification turns, never moves
     profile = outputs["profile"]
     np.testing.assert_allclose([x, y, z], -profile.R.T @ profile.T, atol=1e-12)
+    if played:  # tf2_ros's own listener and lookup: the depth's frame is placed, turned by R1^T
+        from scipy.spatial.transform import Rotation
+
+        from s2r.depth.pipeline import StereoPipeline
+
+        assert summary["depth_frame_known_to_tf"]
+        parent, *quat = summary["tf_lookups"][RECT_FRAME_ID]
+        R1 = StereoPipeline(profile).rectification.R1
+        assert parent == FRAME_ID
+        np.testing.assert_allclose(Rotation.from_quat(quat).as_matrix(), R1.T, atol=1e-9)
     for k, name in enumerate(outputs["names"]):
         from_files = np.load(outputs["root"] / "files" / "depth" / f"{name}.npy")
         assert np.load(out / f"depth_{k}.npy").tobytes() == from_files.tobytes()

@@ -8,7 +8,8 @@ Layout of OUT (``NAME`` is :attr:`StereoFrame.name`: the left file's stem, a bag
 - ``points/NAME.ply`` (``--ply``) and ``points/NAME.pcd`` (``--pcd``): the valid points, metres, coloured;
 - ``camera_info.yaml``: the rectified left camera (the frame of everything above);
 - ``frames.csv``: one row per frame: index, name, stamp_ns, stamp_source (``recorded`` or ``synthesized``: still
-  files carry no time), frame_id, the input (``source``), the valid fraction and every file written for it.
+  files carry no time), frame_id (the rectified left frame, ``<left>_rect_optical_frame``: the optical frame turned
+  by R1, as a bag's /tf_static says), the input (``source``), the valid fraction and every file written for it.
 
 Everything is staged in one :class:`s2r.fileio.OutputBatch` and published together.
 """
@@ -31,7 +32,7 @@ from s2r.depth.outputs import (
     rectified_camera_info,
 )
 from s2r.depth.pipeline import StereoPipeline
-from s2r.depth.stream import DepthFrame
+from s2r.depth.stream import DepthFrame, rectified_frame_id
 from s2r.depth.writers.base import StreamOptions, StreamWriter
 from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, npy_bytes, prepare_output_dir
@@ -70,7 +71,8 @@ class FilesWriter(StreamWriter):
         depth_png = self.out / f"depth/{name}.png"
         row: dict[str, object] = {
             "index": frame.index, "name": name, "stamp_ns": frame.stamp_ns,
-            "stamp_source": "synthesized" if frame.stamp_synthesized else "recorded", "frame_id": frame.frame_id,
+            "stamp_source": "synthesized" if frame.stamp_synthesized else "recorded",
+            "frame_id": rectified_frame_id(frame.frame_id),
             "source": frame.source, "valid_fraction": f"{float(r.valid.mean()):.6f}",
             "depth_png": self._add(f"depth/{name}.png", png_bytes(depth_to_mm(r.depth), depth_png)),
             "depth_npy": self._add(f"depth/{name}.npy", npy_bytes(np.asarray(r.depth, np.float32))),

@@ -1,8 +1,11 @@
 """ROS messages of one depth frame, built with rosbags' typestores (ROS 2 Humble or ROS 1 Noetic definitions).
 
 Conventions (stereo_image_proc, depth_image_proc, REP 118), every message stamped with the input left image's
-stamp and labelled with ONE frame_id, the left optical frame's (stereo_image_proc asserts that both cameras share
-it; the data are in the rectified left camera, which ROS labels with the left camera's frame as well):
+stamp and labelled with ONE frame_id (stereo_image_proc asserts that both cameras share it): the RECTIFIED left
+camera's frame, ``<left>_rect_optical_frame`` (:func:`s2r.depth.stream.rectified_frame_id`), which is where the
+data are. stereo_image_proc labels its outputs with the left optical frame itself, which leaves the
+rectification's rotation R1 out of tf (points come out turned by up to a degree or more); here it is on
+``/tf_static``, so tf consumers place depth and points where they are:
 
 - ``left/image_rect`` (mono8) or ``left/image_rect_color`` (bgr8): the rectified left image the matcher saw;
 - ``left/camera_info``, ``right/camera_info``: the RECTIFIED pair (K = P[:, :3], no distortion, R = I, P = P1 /
@@ -12,7 +15,8 @@ it; the data are in the rectified left camera, which ROS labels with the left ca
 - ``depth/image_rect`` 32FC1 metres (NaN invalid) or 16UC1 millimetres (0 invalid), and ``depth/camera_info``;
 - ``points2``: organised PointCloud2 (x y z float32 metres, rgb packed as float32, NaN invalid), as
   stereo_image_proc's;
-- ``/tf_static``: the right optical frame's pose in the left one (from the profile's R, T).
+- ``/tf_static``: the right optical frame's pose in the left one (from the profile's R, T), and the rectified
+  frame's in the left optical one (rotation R1^T, no translation).
 """
 
 from __future__ import annotations
@@ -115,17 +119,25 @@ class RosMessages:
             header=header, height=h, width=w, fields=fields, is_bigendian=False, point_step=16, row_step=16 * w,
             data=cloud.view(np.uint8).reshape(-1), is_dense=False)
 
-    def tf_static(self, stamp_ns: int, profile: StereoProfile, left_frame: str, right_frame: str) -> Any:
-        """TFMessage: the right optical frame in the left one (X_left = R^T X_right - R^T T)."""
-        R, T = np.asarray(profile.R, np.float64), np.asarray(profile.T, np.float64).reshape(3)
-        x, y, z, w = Rotation.from_matrix(R.T).as_quat()
-        tx, ty, tz = (float(v) for v in -R.T @ T)
+    def _transform(self, stamp_ns: int, parent: str, child: str, rotation: NDArray[np.float64],
+                   translation: NDArray[np.float64]) -> Any:
+        """TransformStamped of ``child`` in ``parent``: ``X_parent = rotation X_child + translation`` (metres)."""
+        x, y, z, w = Rotation.from_matrix(rotation).as_quat()
+        tx, ty, tz = (float(v) for v in translation)
         transform = self._t("geometry_msgs/msg/Transform")(
             translation=self._t("geometry_msgs/msg/Vector3")(x=tx, y=ty, z=tz),
             rotation=self._t("geometry_msgs/msg/Quaternion")(x=float(x), y=float(y), z=float(z), w=float(w)))
-        stamped = self._t("geometry_msgs/msg/TransformStamped")(
-            header=self.header(stamp_ns, left_frame), child_frame_id=right_frame, transform=transform)
-        return self._t("tf2_msgs/msg/TFMessage")(transforms=[stamped])
+        return self._t("geometry_msgs/msg/TransformStamped")(
+            header=self.header(stamp_ns, parent), child_frame_id=child, transform=transform)
+
+    def tf_static(self, stamp_ns: int, profile: StereoProfile, left_frame: str, right_frame: str, *,
+                  rect_frame: str, R1: NDArray[np.float64]) -> Any:
+        """TFMessage: the right optical frame in the left one (``X_left = R^T X_right - R^T T``) and the rectified
+        left frame in the left optical one (``X_left = R1^T X_rect``: the rectification turns, never moves)."""
+        R, T = np.asarray(profile.R, np.float64), np.asarray(profile.T, np.float64).reshape(3)
+        right = self._transform(stamp_ns, left_frame, right_frame, R.T, -R.T @ T)
+        rect = self._transform(stamp_ns, left_frame, rect_frame, np.asarray(R1, np.float64).T, np.zeros(3))
+        return self._t("tf2_msgs/msg/TFMessage")(transforms=[right, rect])
 
     def serialize(self, message: Any) -> bytes:
         kind = message.__msgtype__

@@ -5,7 +5,8 @@ The bag is written in a private temporary folder beside OUT (``.s2r-tmp-*``, sam
 leaves no half bag, and an existing OUT is replaced only with ``--force`` (never a link or a special file).
 
 Topics under the namespace (default ``/stereo``) as :mod:`.ros_messages` lists them; ``/tf_static`` is written
-once, latched (ROS 1) or with transient-local durability (ROS 2), at the first frame's stamp.
+once, latched (ROS 1) or with transient-local durability (ROS 2), at the first frame's stamp: the right optical
+frame and the rectified left frame every message is labelled with, both in the left optical frame.
 """
 
 from __future__ import annotations
@@ -14,15 +15,23 @@ import contextlib
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
-from s2r.depth.stream import DepthFrame, frame_ids
+from s2r.depth.stream import DepthFrame, frame_ids, rectified_frame_id
 from s2r.depth.writers.base import StreamWriter
 from s2r.depth.writers.ros_messages import DEPTH_ENCODINGS, RosMessages
 from s2r.errors import DepthError, S2RError
 from s2r.fileio import TEMP_PREFIX, OutputBatch, check_output_dir, check_output_free, prepare_output_dir
 
-__all__ = ["RosBagWriter", "topic_names"]
+__all__ = ["ROS2_METADATA_VERSION", "RosBagWriter", "topic_names"]
+
+#: metadata.yaml version of ROS 2 bags: 8 (Iron's), which every supported distro reads. Jazzy writes 9, where
+#: ``offered_qos_profiles`` became a YAML list; Humble's rosbag2 (0.15, which writes 5) parses that field as a
+#: string and stops with "yaml-cpp: bad conversion" (ros2/rosbag2#2013). Version 8 keeps it a string of the
+#: integer-valued policies Humble writes, and the keys Humble does not know (``type_description_hash``,
+#: ``custom_data``, ``ros_distro``) are ignored by its reader; Jazzy reads every version up to 9. rosbags writes
+#: only 8 or 9.
+ROS2_METADATA_VERSION: Final = 8
 
 #: ROS 1 Noetic has no tf2_msgs in rosbags' store: its definition, registered on the ROS 1 typestore.
 _TF_MESSAGE_ROS1 = "geometry_msgs/TransformStamped[] transforms\n"
@@ -102,7 +111,7 @@ class RosBagWriter(StreamWriter):
         zero = QosTime(sec=0, nsec=0)
         latched = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero, zero,
                       QosLiveliness.AUTOMATIC, zero, False)
-        self._writer = Writer2(self._bag_path, version=9, storage_plugin=StoragePlugin.MCAP)
+        self._writer = Writer2(self._bag_path, version=ROS2_METADATA_VERSION, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
         for key, topic in topics.items():
             self._connections[key] = self._writer.add_connection(
@@ -116,13 +125,15 @@ class RosBagWriter(StreamWriter):
                            hint="free some space or choose a writable location") from None
 
     def write(self, frame: DepthFrame) -> None:
+        rect_frame = rectified_frame_id(frame.frame_id)
         if self._writer is None:
             self._open(frame)
             left, right = frame_ids(frame.frame_id, self.pipeline.profile.right.frame_id, "", "")
-            self._put("tf", frame.stamp_ns, self._messages.tf_static(frame.stamp_ns, self.pipeline.profile, left,
-                                                                     right))
+            self._put("tf", frame.stamp_ns, self._messages.tf_static(
+                frame.stamp_ns, self.pipeline.profile, left, right, rect_frame=rect_frame,
+                R1=self.rectification(frame).R1))
         m, rect, stamp, r = self._messages, self.rectification(frame), frame.stamp_ns, frame.result
-        header = m.header(stamp, frame.frame_id, seq=self.frames)
+        header = m.header(stamp, rect_frame, seq=self.frames)
         config = self.pipeline.geometry_for(rect.image_size).config
         encoding = "bgr8" if r.rect_left.ndim == 3 else "mono8"
         self._put("image", stamp, m.image(header, r.rect_left, encoding))

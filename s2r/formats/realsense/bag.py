@@ -23,14 +23,13 @@ import numpy as np
 
 from s2r.errors import FormatError
 from s2r.formats._common import as_float, rotation_as_printed
-from s2r.formats.realsense.facts import HINT, RecordingFacts, Row, StreamFacts, file_head
+from s2r.formats.realsense.facts import HINT, RecordingFacts, Row, StreamFacts, file_head, streams_by_name
 from s2r.formats.realsense.text import RealSenseIntrinsic
 
 __all__ = ["BagRecording", "read_bag_facts"]
 
 log = logging.getLogger(__name__)
 MAX_INFO_BYTES = 1 << 20
-_STREAM_TOPIC = re.compile(r"^(/device_0/sensor_(\d+)/([A-Za-z]+_\d+))/(.+)$")
 _OPTION_TOPIC = re.compile(r"^/device_0/sensor_\d+/option/Depth_Units/value$")
 
 
@@ -162,14 +161,7 @@ def _stream(bag: BagRecording, prefix: str) -> StreamFacts:
 def read_bag_facts(path: str | Path) -> RecordingFacts:
     """The facts of a librealsense ROS 1 ``.bag`` recording (device 0); FormatError when it is not one."""
     with BagRecording(path) as bag:
-        prefixes = sorted({m.group(1) for topic in bag.topics if (m := _STREAM_TOPIC.match(topic))})
-        if not prefixes:
-            sample = ", ".join(sorted(bag.topics)[:4]) or "none"
-            raise FormatError(f"no librealsense stream topics (/device_0/sensor_N/<stream>/...; topics: {sample})",
-                              path=bag.path, hint=HINT)
-        streams: dict[str, StreamFacts] = {}
-        for prefix in prefixes:
-            streams.setdefault(prefix.rsplit("/", 1)[1], _stream(bag, prefix))
+        streams = streams_by_name(bag.path, bag.topics, lambda prefix: _stream(bag, prefix))
         device = {str(m.key): str(m.value) for m in bag.all("/device_0/info", "diagnostic_msgs/msg/KeyValue")}
         units = None
         for topic in sorted(t for t in bag.topics if _OPTION_TOPIC.match(t)):

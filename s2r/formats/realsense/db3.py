@@ -29,7 +29,7 @@ import numpy as np
 
 from s2r.errors import FormatError
 from s2r.formats._common import as_float, rotation_as_printed
-from s2r.formats.realsense.facts import HINT, RecordingFacts, Row, StreamFacts, file_head
+from s2r.formats.realsense.facts import HINT, RecordingFacts, Row, StreamFacts, file_head, streams_by_name
 from s2r.formats.realsense.text import RealSenseIntrinsic
 
 __all__ = ["Db3Recording", "parse_key_values", "read_db3_facts"]
@@ -38,7 +38,6 @@ log = logging.getLogger(__name__)
 
 #: Largest info / camera_info / metadata message read (bytes): librealsense's are a few hundred bytes.
 MAX_INFO_BYTES = 1 << 20
-_STREAM_TOPIC = re.compile(r"^(/device_(\d+)/sensor_(\d+)/([A-Za-z]+_\d+))/(.+)$")
 _OPTION_TOPIC = re.compile(r"^/device_0/sensor_\d+/option/Depth_Units/value$")
 _IMAGE_TOPICS = {"image/data": "sensor_msgs/msg/Image", "image/data/compressed": "sensor_msgs/msg/CompressedImage",
                  "image/data/compressedDepth": "sensor_msgs/msg/CompressedImage"}
@@ -266,18 +265,7 @@ def _depth_units(db: Db3Recording) -> float | None:
 def read_db3_facts(path: str | Path) -> RecordingFacts:
     """The facts of a librealsense ``.db3`` recording (device 0); FormatError when it is not one."""
     with Db3Recording(path) as db:
-        prefixes = sorted({m.group(1) for t in db.topics if (m := _STREAM_TOPIC.match(t)) and m.group(2) == "0"})
-        if not prefixes:
-            sample = ", ".join(sorted(db.topics)[:4]) or "none"
-            raise FormatError(f"no librealsense stream topics (/device_0/sensor_N/<stream>/...; topics: {sample})",
-                              path=db.path, hint=HINT)
-        streams: dict[str, StreamFacts] = {}
-        for prefix in prefixes:
-            name = prefix.rsplit("/", 1)[1]
-            if name in streams:
-                log.info("%s: stream %s recorded by two sensors; reading %s", db.path, name, streams[name].prefix)
-                continue
-            streams[name] = _stream(db, prefix)
+        streams = streams_by_name(db.path, db.topics, lambda prefix: _stream(db, prefix))
         device = parse_key_values(db.first_string("/device_0/info") or "")
         return RecordingFacts(path=db.path, layout="ros2-sqlite3", device=device, streams=streams,
                               depth_units_m=_depth_units(db))

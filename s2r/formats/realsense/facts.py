@@ -1,14 +1,17 @@
 """What a librealsense recording states, read without decoding a frame: the model (:class:`RecordingFacts`, one
 :class:`StreamFacts` per stream, :class:`Row` per message) that the layout readers (:mod:`s2r.formats.realsense.db3`,
-:mod:`s2r.formats.realsense.bag`) fill, the stream names and container signatures, and the guarded read of a file's
-first bytes. Topics and extrinsics as :mod:`s2r.formats.realsense.recording` describes them.
+:mod:`s2r.formats.realsense.bag`) fill, their one per-stream dispatch (:func:`streams_by_name`), the stream names and
+container signatures, and the guarded read of a file's first bytes. Topics and extrinsics as
+:mod:`s2r.formats.realsense.recording` describes them.
 """
 
 from __future__ import annotations
 
+import logging
 import os
+import re
 import stat
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -20,8 +23,9 @@ from s2r.errors import FormatError
 from s2r.formats.realsense.text import RealSenseIntrinsic
 
 __all__ = ["BAG_MAGIC", "DEPTH_STREAM", "HINT", "LEFT_STREAM", "RIGHT_STREAM", "SQLITE_MAGIC", "RecordingFacts", "Row",
-           "StreamFacts", "file_head", "is_realsense_recording"]
+           "StreamFacts", "file_head", "is_realsense_recording", "streams_by_name"]
 
+log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
 
 LEFT_STREAM, RIGHT_STREAM, DEPTH_STREAM = "Infrared_1", "Infrared_2", "Depth_0"
@@ -94,6 +98,31 @@ class RecordingFacts:
             raise FormatError(f"no {name} stream in the recording (streams: {found})", path=self.path,
                               hint="record both infrared streams (Infrared 1 and Infrared 2) of a D4xx")
         return self.streams[name]
+
+
+#: A stream's topics: ``/device_0/sensor_S/<Type>_<index>/...`` (device 0); group 1 is the stream's prefix.
+_STREAM_TOPIC = re.compile(r"^(/device_0/sensor_\d+/[A-Za-z]+_\d+)/.+$")
+
+
+def streams_by_name(path: Path, topics: Iterable[str], read_stream: Callable[[str], StreamFacts]
+                    ) -> dict[str, StreamFacts]:
+    """Each stream of device 0 by name (``Infrared_1``...), read from its topic prefix by the layout's
+    ``read_stream``; a name two sensors record is read from the first (logged). FormatError naming a few topics
+    when the recording has no stream topic."""
+    topics = list(topics)
+    prefixes = sorted({m.group(1) for topic in topics if (m := _STREAM_TOPIC.match(topic))})
+    if not prefixes:
+        sample = ", ".join(sorted(topics)[:4]) or "none"
+        raise FormatError(f"no librealsense stream topics (/device_0/sensor_N/<stream>/...; topics: {sample})",
+                          path=path, hint=HINT)
+    streams: dict[str, StreamFacts] = {}
+    for prefix in prefixes:
+        name = prefix.rsplit("/", 1)[1]
+        if name in streams:
+            log.info("%s: stream %s recorded by two sensors; reading %s", path, name, streams[name].prefix)
+            continue
+        streams[name] = read_stream(prefix)
+    return streams
 
 
 def file_head(path: str | Path, size: int, *, error: type[FormatError] = FormatError) -> bytes:
