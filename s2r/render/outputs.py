@@ -75,9 +75,11 @@ def remove_stale_numbered(out: Path, subdirs: Sequence[str], *, keep: Iterable[P
     return removed
 
 
-def encode_png(path: Path, bgr: NDArray[np.uint8], *, batch: OutputBatch | None = None) -> Path:
-    """Write a BGR (or grey) uint8 image as PNG, atomically (staged in ``batch`` when given)."""
-    ok, buf = cv2.imencode(".png", bgr)
+def encode_png(path: Path, bgr: NDArray[np.uint8], *, batch: OutputBatch | None = None, level: int | None = None
+               ) -> Path:
+    """Write a BGR (or grey) uint8 image as PNG, atomically (staged in ``batch`` when given); ``level``: zlib level
+    0-9 (default OpenCV's; 0 for temporary files read back at once: the same pixels, written and read faster)."""
+    ok, buf = cv2.imencode(".png", bgr, [] if level is None else [cv2.IMWRITE_PNG_COMPRESSION, level])
     if not ok:
         raise RenderError("cannot encode PNG", path=path)
     if batch is not None:
