@@ -11,7 +11,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["TEXTURE_PNG_LEVEL", "checkerboard_texture", "speckle_texture", "write_png"]
+from s2r.render.outputs import STORED_PNG
+
+__all__ = ["checkerboard_texture", "speckle_texture", "write_png"]
 
 #: Grey levels of the checkerboard's dark and light squares (not 0/255, so noise does not clip).
 DARK, LIGHT = 20, 235
@@ -58,17 +60,11 @@ def speckle_texture(size_px: int, *, seed: int, finest_px: float = 1.0) -> NDArr
     return np.asarray(np.round(rgb), dtype=np.uint8)
 
 
-#: zlib level of the texture PNGs: stored, not compressed. They are temporary files read back once by the renderer;
-#: a 1024x1024 speckle texture writes and loads in 29 + 14 ms of CPU this way against 44 + 45 ms at OpenCV's default
-#: level (the same pixels: PNG is lossless), and validate --quick writes ten of them.
-TEXTURE_PNG_LEVEL = 0
-
-
 def write_png(path: str | Path, rgb: NDArray[np.uint8]) -> str:
-    """Write an RGB texture as PNG (OpenCV wants BGR; uncompressed, :data:`TEXTURE_PNG_LEVEL`); returns the absolute
-    path."""
+    """Write an RGB texture as PNG (OpenCV wants BGR; stored uncompressed, :data:`s2r.render.outputs.STORED_PNG`: a
+    temporary file the renderer reads once); returns the absolute path."""
     out = Path(path).resolve()
     bgr = np.ascontiguousarray(rgb[:, :, ::-1])
-    if not cv2.imwrite(str(out), bgr, [cv2.IMWRITE_PNG_COMPRESSION, TEXTURE_PNG_LEVEL]):
+    if not cv2.imwrite(str(out), bgr, list(STORED_PNG)):
         raise OSError(f"cannot write texture {out}")
     return str(out)
