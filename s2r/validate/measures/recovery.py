@@ -132,7 +132,7 @@ def recover_calibration(profile: StereoProfile, tol: Tolerances, *, views: int =
         out_dir = Path(tmp) if work_dir is None else work_dir
         start = time.perf_counter()
         boards = render_board_set(profile, out_dir / "boards", views=views, seed=seed, supersample=supersample,
-                                  jobs=jobs, force=True, progress=progress,
+                                  jobs=jobs, force=True, progress=progress, temporary=work_dir is None,
                                   renderer=RendererChoice(renderer, scene_path, scene_camera))
         rendered = time.perf_counter()
         calib_log = logging.getLogger("s2r.calib")
