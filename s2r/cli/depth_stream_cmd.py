@@ -154,9 +154,10 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     if synthesized:
         log.warning("the input carries no time stamps (still files): stamps were synthesized, 1 s + 0.1 s per frame "
                     "(frames.csv / the bag say so)")
+    stamps = "synthesized" if synthesized else _stamp_origin(source)
     summary = {"profile": pipeline.profile.name, "preset": pipeline.preset, "to": args.to, "frames": count,
                "input": described, "output": str(args.output), "frame_id": seen.get("frame_id"),
-               "stamps": "synthesized" if synthesized else "recorded", "published": [str(p) for p in published],
+               "stamps": stamps, "published": [str(p) for p in published],
                "skipped_unpaired": len(skipped), "skipped_first": skipped[:_NAMED_SKIPPED]}
     if args.json:
         print_json(summary)
@@ -165,6 +166,18 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
         print(f"{pipeline.profile.name} / {pipeline.preset}: {count} frames of {described} -> {args.output} "
               f"({args.to}, frame_id {seen.get('frame_id')}, {summary['stamps']} stamps{unpaired})")
     return 0
+
+
+def _stamp_origin(source: Any) -> str:
+    """'recorded', or 'file time' for a video without --start-stamp: its frames are stamped from the file's
+    modification time, which a copy may have changed (warned, so a wrong absolute time is not taken as recorded)."""
+    from s2r.recordings.video import TwoVideoFrames, VideoFrames
+
+    if not isinstance(source, (VideoFrames, TwoVideoFrames)) or source.start_ns is not None:
+        return "recorded"
+    log.warning("the video's stamps start at its file's modification time (a copy may have changed it): pass "
+                "--start-stamp TIME (when the recording began) for true absolute stamps")
+    return "file time"
 
 
 def _noting(frames: Iterator[DepthFrame], seen: dict[str, Any]) -> Iterator[DepthFrame]:

@@ -96,3 +96,27 @@ def test_depth_bag_of_a_video_carries_the_start_stamp(tmp_path: Path) -> None:
     rows = list(csv.DictReader((files / "frames.csv").open()))
     mtime = video.stat().st_mtime_ns
     assert [int(r["stamp_ns"]) for r in rows] == [mtime, mtime + 200_000_000]
+
+
+def test_summary_says_when_video_stamps_come_from_the_file_time(tmp_path: Path,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """Without --start-stamp the absolute times are the file's modification time: the summary says 'file time'
+    and a warning names --start-stamp; with it they are 'recorded'. (An MJPG AVI made by OpenCV: no ffmpeg.)"""
+    import json
+
+    from tests.depth.stream_inputs import known_frames, known_rig, write_profile
+
+    rig, profile = known_rig()
+    pairs = known_frames(rig, distances_m=(1.1,))
+    video = write_cv(tmp_path / "rig.avi", [np.hstack([np.dstack([f.left] * 3), np.dstack([f.right] * 3)])
+                                            for f in pairs], fps=5.0)
+    prof = write_profile(profile, tmp_path / "rig.yaml")
+    assert main(["depth", str(prof), "--video", str(video), "-o", str(tmp_path / "a"), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["stamps"] == "file time"
+    assert "modification time" in err and "--start-stamp" in err
+    assert main(["depth", str(prof), "--video", str(video), "-o", str(tmp_path / "b"), "--json",
+                 "--start-stamp", START]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["stamps"] == "recorded"
+    assert "modification time" not in err
