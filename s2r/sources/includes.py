@@ -153,7 +153,7 @@ def _model_file(folder: Path, budget: IncludeBudget | None, including_file: Path
 
 
 def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str = "<include>",
-            budget: IncludeBudget | None = None) -> Path:
+            budget: IncludeBudget | None = None, folders: bool = True) -> Path:
     """The file an include ``uri`` names, confined to ``roots`` (module docstring).
 
     Args:
@@ -162,6 +162,8 @@ def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str
         roots: the folders included files may lie in, searched in order for ``model://NAME``.
         field: the element named in errors (``<include> line 12``).
         budget: when given, a ``model.config`` read to find a model's SDF counts against it.
+        folders: a folder stands for the model file it holds (SDF); False: a folder is :class:`IncludeNotAFile`
+            (MJCF includes and assets are files).
 
     Raises:
         MissingInclude: an unknown model, a missing file or a web URI.
@@ -180,6 +182,9 @@ def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str
     if not _inside(target, real_roots):
         raise _outside(uri, including_file, field)
     assert target is not None
+    if target.is_dir() and not folders:
+        raise IncludeNotAFile(f"include {text[:200]!r} is a folder, not a regular file", path=including_file,
+                              field=field, hint="give a file")
     if target.is_dir():
         target = _real(_model_file(target, budget, including_file, field))
         if not _inside(target, real_roots):

@@ -29,6 +29,15 @@ def test_a_fifo_include_is_named_a_fifo_at_once(tmp_path: Path, name: str, text:
     assert "not found" not in lines[0] and not (tmp_path / "p.yaml").exists()
 
 
+def test_a_folder_mjcf_include_is_named_a_folder(tmp_path: Path) -> None:
+    (tmp_path / "pipe.xml").mkdir()  # MJCF includes are files: no model folder as in SDF
+    (tmp_path / "scene.xml").write_text(_MJCF)
+    done = run_s2r("profile", "from-description", str(tmp_path / "scene.xml"), "-o", str(tmp_path / "p.yaml"),
+                   timeout_s=30)
+    assert done.returncode == 2, done.stderr
+    assert "include 'pipe.xml' is a folder, not a regular file (give a file)" in done.stderr, done.stderr
+
+
 def test_a_fifo_world_asset_is_named_a_fifo(tmp_path: Path) -> None:
     pytest.importorskip("mujoco")
     os.mkfifo(tmp_path / "pipe.png")

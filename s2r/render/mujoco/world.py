@@ -98,7 +98,7 @@ def _read_asset(world: WorldFiles, doc: XmlDoc, node: ET.Element, attr: str) -> 
     here = where(doc, node, attr)
     joined = str(PurePosixPath(_asset_dir(doc, node)) / name) if _asset_dir(doc, node) else name
     try:
-        path = resolve(joined, including_file=doc.path, roots=[doc.path.parent], field=here)
+        path = resolve(joined, including_file=doc.path, roots=[doc.path.parent], field=here, folders=False)
     except MissingInclude:
         raise RenderError(f"file {name[:200]!r} not found", path=doc.path, field=here,
                           hint="fix the path (relative to the scene's folder, after meshdir/texturedir)") from None
