@@ -6,15 +6,20 @@ holds an input of the command. Writing itself is :mod:`s2r.fileio.atomic`."""
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
+import shlex
 import stat
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 from s2r.errors import OutputExistsError, S2RError
 
+log = logging.getLogger(__name__)
+
 __all__ = ["TEMP_PREFIX", "check_output_dir", "check_output_free", "discard_on_failure", "prepare_output_dir",
-           "protect_inputs", "removing_new_folders_on_failure"]
+           "protect_inputs", "removing_new_folders_on_failure", "warn_leftovers"]
 
 
 class _FailureUndo:
@@ -41,6 +46,8 @@ def removing_new_folders_on_failure() -> Iterator[None]:
     inside one."""
     undo = _FailureUndo()
     _NEW_FOLDERS.append(undo)
+    with _SCAN_LOCK:
+        _SCANNED.clear()  # each command reports what it finds beside its own outputs
     try:
         yield
     except BaseException:
@@ -126,6 +133,7 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
     (``--force`` never replaces them), and a path under a file. Refused unless ``force``: an existing file.
     """
     out = Path(path)
+    warn_leftovers(out.parent)
     st = _lstat(out)
     if st is None:
         return out
@@ -137,6 +145,40 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
 
 #: Every temporary file or folder s2r creates starts with this: clean-ups only ever touch such names.
 TEMP_PREFIX = ".s2r-tmp-"
+
+
+#: Folders already searched for leftovers by this command (:func:`warn_leftovers`), so a folder of 10,000 frames
+#: is listed once, not once per frame.
+_SCANNED: set[Path] = set()
+_SCAN_LOCK = threading.Lock()
+
+
+def warn_leftovers(folder: Path) -> None:
+    """Warn, in one line, about ``.s2r-tmp-*`` entries in ``folder`` that no run of this process made: a run
+    killed by SIGKILL or a power loss leaves its temporaries (``*.tmp``) and, under ``--force``, the previous
+    output folder it moved aside (``*.old``). They are never removed here: a concurrent run may own them."""
+    key = Path(os.path.abspath(folder))
+    with _SCAN_LOCK:
+        if key in _SCANNED:
+            return
+        _SCANNED.add(key)
+    try:
+        names = sorted(e.name for e in os.scandir(folder) if e.name.startswith(TEMP_PREFIX))
+    except OSError:
+        return
+    own = {old.name for undo in _NEW_FOLDERS for _, old in undo.replaced}
+    notes = []
+    for name in (n for n in names if n not in own):
+        entry = folder / name
+        if name.endswith(".old") and entry.is_dir() and not entry.is_symlink():
+            output = folder / name[len(TEMP_PREFIX):].rsplit(".", 2)[0]
+            notes.append(f"{entry}: left by an interrupted s2r run (the previous {output.name}, moved aside by "
+                         f"--force): move it back with `mv {shlex.quote(str(entry))} {shlex.quote(str(output))}` "
+                         f"(once no {output.name} is there) or delete it")
+        else:
+            notes.append(f"{entry}: left by an interrupted s2r run (a temporary): safe to delete")
+    if notes:  # one line; a concurrent run may own them, hence no removal
+        log.warning("%s (unless another s2r run is writing there now; nothing was removed)", "; ".join(notes))
 
 
 def _cannot_write(out: Path, exc: OSError) -> S2RError:
@@ -185,8 +227,10 @@ def _check_below_root(root: Path, out: Path) -> None:
 
 
 def check_output_dir(path: str | Path, *, force: bool) -> Path:
-    """Refuse (creating nothing) a symlink or non-folder, or a folder that holds files unless ``force``."""
+    """Refuse (creating nothing) a symlink or non-folder, or a folder that holds files unless ``force``. Leftovers
+    of an interrupted run beside the folder or in it are reported (:func:`warn_leftovers`)."""
     out = Path(path)
+    warn_leftovers(out.parent)
     st = _lstat(out)
     if st is None:
         return out
@@ -196,6 +240,8 @@ def check_output_dir(path: str | Path, *, force: bool) -> Path:
     if not stat.S_ISDIR(st.st_mode):
         raise OutputExistsError("is a file, expected a folder; nothing was written", path=out,
                                 hint="choose another output folder")
+    if not force:  # with --force the folder is replaced whole, or its files checked one by one
+        warn_leftovers(out)
     if any(out.iterdir()) and not force:
         raise OutputExistsError(
             "output folder already holds files; nothing was overwritten", path=out, hint="pass --force to reuse it"

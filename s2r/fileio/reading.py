@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 
 from s2r.errors import S2RError
 
-__all__ = ["MAX_NPY_BYTES", "MAX_TEXT_BYTES", "NotARegularFile", "read_file_head", "read_npy", "read_regular_file",
-           "read_text_file", "sha256_file"]
+__all__ = ["MAX_NPY_BYTES", "MAX_TEXT_BYTES", "NotARegularFile", "check_regular_file", "read_file_head", "read_npy",
+           "read_regular_file", "read_text_file", "sha256_file"]
 
 
 def sha256_file(path: str | Path, *, chunk_bytes: int = 1 << 20) -> str:
@@ -69,6 +69,30 @@ def read_regular_file(path: str | Path, *, limit: int, dir_fd: int | None = None
         return data
     finally:
         os.close(fd)
+
+
+def _kind(mode: int) -> str:
+    """What a non-regular file is, in words (``a FIFO``, ``a device``, ``a socket``)."""
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    return "a socket" if stat.S_ISSOCK(mode) else "not a file"
+
+
+def check_regular_file(path: str | Path) -> None:
+    """Check, from ``stat`` alone (nothing opened, so a FIFO cannot block), that ``path`` is a regular file.
+
+    Raises:
+        FileNotFoundError: nothing at ``path`` (or a dangling link).
+        IsADirectoryError: a folder.
+        NotARegularFile: ``is a FIFO, not a regular file`` (or a device, a socket).
+    """
+    mode = os.stat(path).st_mode
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+    if not stat.S_ISREG(mode):
+        raise NotARegularFile(f"is {_kind(mode)}, not a regular file")
 
 
 def _regular_file_info(fd: int, path: str | Path) -> os.stat_result:

@@ -44,9 +44,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from s2r.errors import SourceError
-from s2r.fileio import NotARegularFile, read_regular_file
+from s2r.fileio import NotARegularFile, check_regular_file, read_regular_file
 
-__all__ = ["CAMERALESS_MODELS", "IncludeBudget", "MissingInclude", "is_cameraless", "model_name", "resolve", "shown"]
+__all__ = ["CAMERALESS_MODELS", "IncludeBudget", "IncludeNotAFile", "MissingInclude", "is_cameraless", "model_name",
+           "resolve", "shown"]
 
 #: Standard Gazebo models that hold no sensor (lights and planes), as normalised by :func:`model_name`.
 CAMERALESS_MODELS = frozenset({"sun", "ground_plane", "asphalt_plane"})
@@ -65,6 +66,28 @@ class MissingInclude(SourceError):
                  hint: str | None = None) -> None:
         super().__init__(message, path=path, field=field, hint=hint)
         self.uri = uri
+
+
+class IncludeNotAFile(SourceError):
+    """An include that names something that exists but is no regular file: a FIFO, a device, a socket, a folder
+    (where a file is due). Never opened: a FIFO would block until someone writes to it."""
+
+
+def _regular(target: Path, shown_uri: str, including_file: Path, field: str) -> bool:
+    """True when ``target`` is a regular file, False when nothing is there; :class:`IncludeNotAFile` otherwise."""
+    try:
+        check_regular_file(target)
+    except (FileNotFoundError, NotADirectoryError):
+        return False
+    except IsADirectoryError:
+        raise IncludeNotAFile(f"include {shown_uri!r} is a folder, not a regular file", path=including_file,
+                              field=field, hint="give a file") from None
+    except NotARegularFile as exc:
+        raise IncludeNotAFile(f"include {shown_uri!r} {exc}", path=including_file, field=field,
+                              hint="give a file") from None
+    except OSError:
+        return False
+    return True
 
 
 def shown(text: str, limit: int = 200) -> str:
@@ -130,7 +153,7 @@ def _model_file(folder: Path, budget: IncludeBudget | None, including_file: Path
 
 
 def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str = "<include>",
-            budget: IncludeBudget | None = None) -> Path:
+            budget: IncludeBudget | None = None, folders: bool = True) -> Path:
     """The file an include ``uri`` names, confined to ``roots`` (module docstring).
 
     Args:
@@ -139,6 +162,8 @@ def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str
         roots: the folders included files may lie in, searched in order for ``model://NAME``.
         field: the element named in errors (``<include> line 12``).
         budget: when given, a ``model.config`` read to find a model's SDF counts against it.
+        folders: a folder stands for the model file it holds (SDF); False: a folder is :class:`IncludeNotAFile`
+            (MJCF includes and assets are files).
 
     Raises:
         MissingInclude: an unknown model, a missing file or a web URI.
@@ -157,12 +182,15 @@ def resolve(uri: str, *, including_file: Path, roots: Sequence[Path], field: str
     if not _inside(target, real_roots):
         raise _outside(uri, including_file, field)
     assert target is not None
+    if target.is_dir() and not folders:
+        raise IncludeNotAFile(f"include {text[:200]!r} is a folder, not a regular file", path=including_file,
+                              field=field, hint="give a file")
     if target.is_dir():
         target = _real(_model_file(target, budget, including_file, field))
         if not _inside(target, real_roots):
             raise _outside(uri, including_file, field)
         assert target is not None
-    if not target.is_file():
+    if not _regular(target, text[:200], including_file, field):
         raise MissingInclude(f"included file {text[:200]!r} not found", uri=uri, path=including_file, field=field,
                              hint="fix the <uri> or pass --package-path with the model folder")
     return target
@@ -187,7 +215,7 @@ def _resolve_model(uri: str, including_file: Path, roots: Sequence[Path], field:
         if not _inside(target, roots):
             raise _outside(uri, including_file, field)
         assert target is not None
-        if not target.is_file():
+        if not _regular(target, uri[:200], including_file, field):
             raise MissingInclude(f"model {head!r} has no file {uri[:200]!r}", uri=uri, path=including_file,
                                  field=field, hint="fix the <uri> or the model's model.config")
         return target

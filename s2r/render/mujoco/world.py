@@ -30,7 +30,7 @@ from pathlib import Path, PurePosixPath
 from s2r.errors import RenderError, SourceError
 from s2r.fileio import NotARegularFile, read_regular_file, read_text_file
 from s2r.imageio import declared_size
-from s2r.sources.includes import MissingInclude, resolve
+from s2r.sources.includes import IncludeNotAFile, MissingInclude, resolve
 from s2r.sources.mjcf.include import expand_includes
 from s2r.sources.mjcf.pose import where
 from s2r.sources.xmlparse import XmlDoc, parse_xml
@@ -98,10 +98,13 @@ def _read_asset(world: WorldFiles, doc: XmlDoc, node: ET.Element, attr: str) -> 
     here = where(doc, node, attr)
     joined = str(PurePosixPath(_asset_dir(doc, node)) / name) if _asset_dir(doc, node) else name
     try:
-        path = resolve(joined, including_file=doc.path, roots=[doc.path.parent], field=here)
+        path = resolve(joined, including_file=doc.path, roots=[doc.path.parent], field=here, folders=False)
     except MissingInclude:
-        raise RenderError(f"file {name[:200]!r} not found (or not a regular file)", path=doc.path, field=here,
+        raise RenderError(f"file {name[:200]!r} not found", path=doc.path, field=here,
                           hint="fix the path (relative to the scene's folder, after meshdir/texturedir)") from None
+    except IncludeNotAFile as exc:  # a FIFO or device: never opened
+        raise RenderError(exc.message.replace("include ", "file ", 1), path=doc.path, field=here,
+                          hint="give a file") from None
     except SourceError as exc:  # outside the scene's folder: the resolver's words, for a file, not an include
         raise RenderError(exc.message.replace("include ", "file ", 1), path=doc.path, field=here,
                           hint="keep the world's files inside its folder") from None

@@ -14,7 +14,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from s2r.errors import SourceError
-from s2r.sources.includes import IncludeBudget, MissingInclude, resolve
+from s2r.sources.includes import IncludeBudget, IncludeNotAFile, MissingInclude, resolve
 from s2r.sources.mjcf.pose import where
 from s2r.sources.xmlparse import XmlDoc, parse_xml
 
@@ -25,11 +25,11 @@ def _locate(doc: XmlDoc, name: str, current: Path, field: str, budget: IncludeBu
     """MuJoCo's lookup: next to the main file, else next to the including file; both inside the scene's folder."""
     roots = [doc.path.parent]
     try:
-        return resolve(name, including_file=doc.path, roots=roots, field=field, budget=budget)
-    except MissingInclude:
+        return resolve(name, including_file=doc.path, roots=roots, field=field, budget=budget, folders=False)
+    except (MissingInclude, IncludeNotAFile):  # not a file next to the main file: next to the including one?
         if current == doc.path:
             raise
-    return resolve(name, including_file=current, roots=roots, field=field, budget=budget)
+    return resolve(name, including_file=current, roots=roots, field=field, budget=budget, folders=False)
 
 
 def _include(doc: XmlDoc, child: ET.Element, current: Path, seen: set[Path], budget: IncludeBudget) -> list[ET.Element]:
