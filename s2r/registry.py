@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from s2r.errors import ProfileError
+from s2r.fileio import protect_input
 
 if TYPE_CHECKING:  # listing and resolving names needs neither the formats nor the profile models
     from s2r.profile import StereoProfile
@@ -68,6 +69,7 @@ def resolve_profile(name_or_path: str | Path | None = None) -> Path:
         raise ProfileError(f"unknown profile name {text!r}{did_you_mean(text, known)}",
                            hint=f"`s2r profile list` shows them all; pass a file path or add a folder to "
                            f"{PROFILE_PATH_ENV}")
+    protect_input(known[text])  # found by name: --force must not write over it or replace its folder
     return known[text]
 
 

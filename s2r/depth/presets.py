@@ -147,9 +147,15 @@ def resolve_preset(
             raise DepthError(f"num_disparities must be a positive multiple of 16, got {num_disparities}",
                              field="num_disparities", hint="use 16, 32, 48, ...")
         config = replace(config, num_disparities=num_disparities)
-    if config.min_disparity + config.num_disparities >= width:
+    # OpenCV's matchers also need half a block beside the range (stereosgbm.cpp: "too small for your window size
+    # and max disparity"): a derived range shrinks to fit; a given one is refused below.
+    room = width - 1 - config.block_size // 2 - config.min_disparity
+    if num_disparities is None and config.num_disparities > room and room >= 16:
+        config = replace(config, num_disparities=room // 16 * 16)
+    if config.min_disparity + config.num_disparities + config.block_size // 2 >= width:
         raise DepthError(
-            f"disparity range {config.min_disparity}+{config.num_disparities} px does not fit the {width} px image",
+            f"disparity range {config.min_disparity}+{config.num_disparities} px and the {config.block_size} px "
+            f"block do not fit the {width} px image",
             field="num_disparities", hint="pass a smaller num_disparities or raise matcher.min_depth_m")
     nearest = fx_px * baseline_m / max(config.min_disparity + config.num_disparities - 1, 1)
     if nearest > z_min * 1.0001:

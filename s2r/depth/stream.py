@@ -73,7 +73,8 @@ def frame_ids(profile_left: str, profile_right: str, input_frame_id: str, profil
     left = profile_left or input_frame_id
     if not left:
         left = re.sub(r"[^A-Za-z0-9_]", "_", profile_name).strip("_") + "_left_optical_frame"
-        log.warning("neither the profile nor the recording names a frame_id: the outputs use %r", left)
+        log.warning("neither the profile nor the recording names a frame_id: the left optical frame is %r and the "
+                    "depth data are labelled with its rectified frame %r", left, rectified_frame_id(left))
     right = profile_right or (left.replace("left", "right") if "left" in left else f"{left}_right")
     return left, right
 

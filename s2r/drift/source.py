@@ -8,6 +8,7 @@ memory stays bounded), and every image's declared size is checked against the pr
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator
 from dataclasses import dataclass, fields
 from typing import Any
@@ -17,8 +18,10 @@ from numpy.typing import NDArray
 
 from s2r.errors import CheckError
 from s2r.profile import StereoProfile
-from s2r.recordings import RecordingSpec, open_recording
+from s2r.recordings import RecordingSpec, open_recording, skipped_inputs
 from s2r.recordings.files import FileFrames
+
+log = logging.getLogger(__name__)
 
 __all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "spread"]
 
@@ -102,8 +105,17 @@ def read_pairs(source: StereoSource, *, sizes: Sizes = None) -> Iterator[GreyPai
     recording = open_recording(source.recording, expected_size=sizes, grey=True, error=CheckError)
     if isinstance(recording, FileFrames):
         recording.indices = tuple(spread(len(recording), source.max_frames))
-        return ((f.name, f.left, f.right) for f in recording.frames())
-    return _spread_stream(recording.frames(), source)
+        return _warning_skipped(((f.name, f.left, f.right) for f in recording.frames()), recording)
+    return _warning_skipped(_spread_stream(recording.frames(), source), recording)
+
+
+def _warning_skipped(pairs: Iterator[GreyPair], recording: object) -> Iterator[GreyPair]:
+    """``pairs``, then one warning naming the inputs the recording skipped for want of a partner (as depth and
+    calibrate say): a check on fewer frames than the folder seems to hold says why."""
+    yield from pairs
+    if skipped := skipped_inputs(recording):
+        log.warning("%d input image(s) had no partner and were not checked: %s%s", len(skipped),
+                    ", ".join(skipped[:5]), ", ..." if len(skipped) > 5 else "")
 
 
 def _spread_stream(frames: Iterator[Any], source: StereoSource) -> Iterator[GreyPair]:

@@ -18,6 +18,7 @@ from s2r.fileio.outputs import (
     check_output_free,
     discard_on_failure,
     prepare_output_dir,
+    protect_input,
     protect_inputs,
     removing_new_folders_on_failure,
 )
@@ -48,6 +49,7 @@ __all__ = [
     "discard_on_failure",
     "npy_bytes",
     "prepare_output_dir",
+    "protect_input",
     "protect_inputs",
     "read_file_head",
     "read_npy",

@@ -138,6 +138,9 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
     if st is None:
         return out
     _refuse_special(out, st)
+    if (given := _input_at(out)) is not None:
+        raise OutputExistsError(f"is {given}, an input of this command: nothing was overwritten, even with --force",
+                                path=out, hint="write the output to a file of its own")
     if not force:
         raise OutputExistsError("already exists; nothing was overwritten", path=out, hint="pass --force to replace it")
     return out
@@ -286,10 +289,24 @@ def prepare_output_dir(path: str | Path, *, force: bool, replace: bool = True) -
 _INPUTS: list[Path] = []
 
 
+def protect_input(path: str | os.PathLike[str]) -> None:
+    """Add one input found on the way (a profile named by ``S2R_PROFILE_PATH``, not typed as a path) to the
+    paths :func:`protect_inputs` keeps from being written over or replaced."""
+    if os.path.lexists(path) and Path(path) not in _INPUTS:
+        _INPUTS.append(Path(path))
+
+
+def _input_at(out: Path) -> Path | None:
+    """The input of this command that ``out`` is (the same file or folder, symlinks followed), if any."""
+    resolved = out.resolve()
+    return next((p for p in _INPUTS if p.resolve() == resolved), None)
+
+
 def protect_inputs(paths: list[str | os.PathLike[str]]) -> None:
     """Remember the paths a command was given (files, folders, the folder part of a glob): ``--force`` then never
     replaces an output folder that holds one of them (``-o data --force`` with ``--left-dir data/left`` would
-    remove the recording). The CLI calls it with every path among a command's arguments."""
+    remove the recording), nor writes a file over one. The CLI calls it with every path among a command's
+    arguments but its outputs (-o/--output/--report)."""
     _INPUTS.clear()
     for given in paths:
         text = str(given)
@@ -312,7 +329,7 @@ def _move_aside(out: Path) -> None:
         raise OutputExistsError("is the working folder, the home folder, a parent of the working folder or a "
                                 "filesystem root: --force would replace it whole; nothing was written", path=out,
                                 hint="give a folder of its own to the output, e.g. -o out/depth")
-    held = next((p for p in _INPUTS if resolved in p.resolve().parents), None)
+    held = _input_at(out) or next((p for p in _INPUTS if resolved in p.resolve().parents), None)
     if held is not None:
         raise OutputExistsError(f"holds {held}, an input of this command: --force would replace the folder whole; "
                                 "nothing was written", path=out, hint="write the output to a folder of its own")

@@ -27,7 +27,7 @@ from s2r.recordings.bagfiles import bag_storage_files
 from s2r.recordings.decode import SizeRule, to_uint8
 
 __all__ = ["BagFrame", "BagMessage", "bag_image_topics", "check_image_topics", "image_from_message", "open_bag",
-           "paired_bag_frames", "paired_messages"]
+           "paired_bag_frames", "paired_messages", "refuse_non_camera"]
 
 log = logging.getLogger(__name__)
 IMAGE_TYPES = frozenset({"sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage"})
@@ -180,12 +180,22 @@ def _named(message: BagMessage) -> str:
     return f"{message.topic} @ {message.stamp_ns} ns"
 
 
+def refuse_non_camera(message: BagMessage, *, error: type[S2RError], topic: str, where: str) -> None:
+    """A raw image in a float encoding (32FC1, 64FC1: depth or disparity, as s2r's own and ROS's depth topics)
+    is not a camera's image: refuse it in one line instead of matching on its scaled values."""
+    encoding = str(getattr(message.msg, "encoding", ""))
+    if encoding.upper().startswith(("32FC", "64FC")):
+        raise error(f"{where}: a {encoding} image (depth or disparity, not a camera image)", field=topic,
+                    hint="give the topics of the left and right camera images (e.g. .../image_raw or image_rect)")
+
+
 def grey_of(message: BagMessage, *, rule: SizeRule | None = None, side: str = "left",
             error: type[S2RError] = CalibrationError, bag: Path | None = None) -> NDArray[np.uint8]:
     """A message's image as 8-bit grey (H, W), its size checked by ``rule`` before decoding (an error names
     ``bag``, the topic and the stamp)."""
     flag = "--left-topic" if side == "left" else "--right-topic"
     where = f"{'' if bag is None else f'{bag} '}{message.topic} @ {message.stamp_ns} ns"
+    refuse_non_camera(message, error=error, topic=flag, where=where)
     image = image_from_message(message.msg, message.msgtype, error=error, topic=flag, rule=rule, side=side,
                                where=where)
     return to_uint8(image, grey=True)

@@ -12,7 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from s2r.errors import S2RError
-from s2r.recordings.bags import BagMessage, check_image_topics, grey_of, image_from_message, open_bag, paired_messages
+from s2r.recordings.bags import (
+    BagMessage,
+    check_image_topics,
+    grey_of,
+    image_from_message,
+    open_bag,
+    paired_messages,
+    refuse_non_camera,
+)
 from s2r.recordings.decode import SizeRule, to_uint8
 from s2r.recordings.frames import StereoFrame, thinned
 
@@ -66,8 +74,10 @@ class BagFrames:
     def _image(self, message: BagMessage, side: str) -> Any:
         if self.grey:
             return grey_of(message, rule=self.rule, side=side, error=self.rule.error, bag=self.bag)
+        where = f"{self.bag} {message.topic} @ {message.stamp_ns} ns"
+        refuse_non_camera(message, error=self.rule.error, topic=f"--{side}-topic", where=where)
         image = image_from_message(message.msg, message.msgtype, error=self.rule.error, rule=self.rule, side=side,
-                                   topic=f"--{side}-topic", where=f"{self.bag} {message.topic} @ {message.stamp_ns} ns")
+                                   topic=f"--{side}-topic", where=where)
         return to_uint8(image, grey=False)
 
     def messages(self) -> Iterator[tuple[int, BagMessage, BagMessage]]:

@@ -150,7 +150,7 @@ def test_bad_options(small_rig: StereoProfile) -> None:
         StereoPipeline(small_rig, postprocess=["median", "blur"])
     with pytest.raises(DepthError, match=r"num_disparities: .*multiple of 16, got 40"):
         StereoPipeline(small_rig, num_disparities=40)
-    with pytest.raises(DepthError, match="does not fit the 320 px image"):
+    with pytest.raises(DepthError, match="do not fit the 320 px image"):
         StereoPipeline(small_rig, num_disparities=320)
 
 
