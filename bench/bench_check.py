@@ -116,7 +116,8 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (median reported, default 5)")
     args = parser.parse_args()
     runs = {"plain OpenCV (SIFT + ratio + mutual)": [sys.executable, "-c", PLAIN, str(args.folder)],
-            "s2r check --json": [*S2R, "check", str(args.profile), str(args.folder), "--json"]}
+            "s2r check --json": [*S2R, "check", str(args.profile), str(args.folder), "--json"],
+            "s2r check --json --jobs 1": [*S2R, "check", str(args.profile), str(args.folder), "--json", "--jobs", "1"]}
     for argv in runs.values():  # warm the file cache and the bytecode
         time_once(argv)
     times: dict[str, list[tuple[float, float]]] = {label: [] for label in runs}

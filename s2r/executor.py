@@ -5,7 +5,8 @@ from here, so a new backend is added once:
 
 - :func:`local_pool`: a ``concurrent.futures.ProcessPoolExecutor`` whose workers start by ``fork`` where it
   exists (instant, cv2 already loaded, the caller's ``__main__`` never re-imported) and die with their parent,
-  even when the parent is killed with ``kill -9``;
+  even when the parent is killed with ``kill -9``; :func:`s2r.cvpool.opencv_pool` wraps it for OpenCV
+  work (calibrate's detection and fold solves, check's feature matching);
 - :func:`open_runner`: a :class:`TaskRunner` over either that pool or a Dask ``distributed.Client`` (an
   existing scheduler at ``tcp://host:8786``, or a local cluster of worker processes started for the run).
   ``distributed`` is imported only when Dask is asked for.

@@ -20,6 +20,7 @@ LAYERS: dict[str, int] = {
     "sensor.model": 1,  # the sensor model's type, carried by profiles
     "profile": 2, "targets": 2,
     "rectification": 3, "imageio": 3, "lens": 3,  # lens: camera and lens maths (projection, distortion, models)
+    "cvpool": 3,  # the local process pool for OpenCV work
     "formats": 4, "sources": 4,
     "recordings": 5,  # every input that yields stereo frames (files, bags, videos, RealSense recordings)
     "registry": 5, "htmlreport": 5, "sensor": 5,  # sensor: applies a sensor model (render uses it)
@@ -28,7 +29,7 @@ LAYERS: dict[str, int] = {
     "validate": 8, "sensor.fit": 8,  # sensor.fit: fits a sensor model on recordings (uses quality)
     "cli": 9, "__main__": 10, "__init__": 10,
 }
-CV2_HOMES = {"lens", "calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros",
+CV2_HOMES = {"lens", "cvpool", "calib", "depth", "render", "rectification", "imageio", "formats.opencv", "formats.ros",
              "validate", "quality", "drift", "sensor", "recordings"}
 #: Inside a package, its parts (modules and subpackages, by their first name below the package) in layers, lowest
 #: first: a part may import parts of its own layer or a lower one. Every part must be listed, so a new module says

@@ -17,9 +17,9 @@ import numpy as np
 if TYPE_CHECKING:
     from s2r.profile import StereoProfile
 
-__all__ = ["ProgressBar", "add_force", "add_json", "add_profile_positional", "add_recording_inputs", "argparse_type",
-           "check_left_board", "load_profile", "parse_distances", "parse_pattern", "print_json", "profile_argument",
-           "to_jsonable"]
+__all__ = ["ProgressBar", "add_force", "add_jobs", "add_json", "add_profile_positional", "add_recording_inputs",
+           "argparse_type", "check_jobs", "check_left_board", "load_profile", "parse_distances", "parse_pattern",
+           "print_json", "profile_argument", "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -142,6 +142,13 @@ def add_jobs(parser: Any, *, default: int | None, help: str) -> None:
     validate, depth, fleet check), with ``--workers`` as a hidden alias (depth and fleet check's former name)."""
     parser.add_argument("--jobs", type=int, default=default, metavar="N", help=help)
     parser.add_argument("--workers", type=int, dest="jobs", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+
+def check_jobs(jobs: int | None, error: Callable[..., Exception]) -> None:
+    """Refuse ``--jobs`` below 1 (None is a command's default) with ``error`` (the command's S2RError type): one
+    message for every command."""
+    if jobs is not None and jobs < 1:
+        raise error(f"must be at least 1, got {jobs}", field="--jobs/--workers", hint="e.g. --jobs 2")
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:

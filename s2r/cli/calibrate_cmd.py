@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from s2r.cli._common import ProgressBar, add_force, add_json, parse_pattern, print_json
+from s2r.cli._common import ProgressBar, add_force, add_jobs, add_json, check_jobs, parse_pattern, print_json
 from s2r.cli._recording import add_recording_arguments, spec_from_args
 from s2r.errors import CalibrationError, terminal_safe
 from s2r.fileio import OutputBatch, check_output_free, discard_on_failure, prepare_output_dir
@@ -33,7 +33,7 @@ def register(sub: Any) -> None:
     p.add_argument("-o", "--output", type=Path, default=None, help="profile YAML to write (required)")
     p.add_argument("--name", default=None, help="profile name (default: the output file's stem)")
     p.add_argument("--report", type=Path, default=None, help="write an HTML report into this folder")
-    p.add_argument("--jobs", type=int, default=None, help="detection processes (default: all cores)")
+    add_jobs(p, default=None, help="detection and resampling processes (default: all cores)")
     p.add_argument("--distortion", choices=("k1k2p1p2", "k1k2", "plumb_bob", "rational", "equidistant"),
                    default="k1k2p1p2",
                    help="distortion terms to solve (default k1k2p1p2: k3 fixed at 0, as ROS camera_calibration; "
@@ -111,8 +111,7 @@ def _check_args(args: argparse.Namespace) -> tuple[int, int]:
     if not args.square <= MAX_SQUARE_M:
         raise CalibrationError(f"square size {args.square:g} m is over {MAX_SQUARE_M:g} m", field="--square",
                                hint="--square is the square edge in metres; for 25 mm give --square 0.025")
-    if args.jobs is not None and args.jobs < 1:
-        raise CalibrationError(f"--jobs must be at least 1, got {args.jobs}", field="--jobs")
+    check_jobs(args.jobs, CalibrationError)
     if not 0 < args.max_dt < float("inf"):
         raise CalibrationError(f"--max-dt must be positive seconds, got {args.max_dt}", field="--max-dt",
                                hint="e.g. --max-dt 0.01")

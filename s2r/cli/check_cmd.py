@@ -20,6 +20,7 @@ from s2r.cli._common import (
     add_jobs,
     add_json,
     add_profile_positional,
+    check_jobs,
     load_profile,
     print_json,
     profile_argument,
@@ -53,6 +54,7 @@ def register(sub: Any) -> None:
     add_profile_positional(p, help="profile name or path (or give it as --profile)")
     add_recording_arguments(p, max_frames_default=20, max_frames_help=_MAX_FRAMES_HELP, what="ordinary stereo pairs")
     _add_settings(p, max_frames=False)
+    add_jobs(p, default=None, help="feature-matching processes (default: all cores)")
     p.add_argument("--report", type=Path, metavar="DIR", help="write DIR/check.html")
     p.add_argument("--fix", action="store_true", help="write the corrected profile to -o")
     p.add_argument("-o", "--output", type=Path, help="--fix: corrected profile YAML to write")
@@ -128,6 +130,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         raise CheckError("--fix and -o go together", field="--fix", hint="pass --fix -o corrected.yaml")
     _refuse_reversed(args)
     settings, source = _settings(args), _source(args)
+    check_jobs(args.jobs, CheckError)
     profile = load_profile(args.profile)
     if args.output is not None:
         check_output_free(args.output, force=args.force)
@@ -135,7 +138,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
         prepare_output_dir(args.report, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))
     pairs = read_pairs(source, sizes=profile_sizes(profile))
-    checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames)
+    checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames,
+                        jobs=args.jobs or os.cpu_count() or 1)
     result = checked.result
     steps = _next_steps(args, result)
     if args.json:
@@ -200,8 +204,7 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     from s2r.drift.fleet_store import check_history_folder
 
     settings = _settings(args)
-    if args.jobs < 1:
-        raise CheckError(f"must be at least 1, got {args.jobs}", field="--jobs/--workers", hint="e.g. 2")
+    check_jobs(args.jobs, CheckError)
     cores = os.cpu_count() or 1
     if args.scheduler is None and args.jobs > 4 * cores:  # each is a process holding images: not a queue
         raise CheckError(f"{args.jobs} local worker processes on {cores} cores", field="--jobs/--workers",

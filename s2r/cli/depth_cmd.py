@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from s2r.cli._common import ProgressBar, add_force, add_jobs, add_json, print_json
+from s2r.cli._common import ProgressBar, add_force, add_jobs, add_json, check_jobs, print_json
 from s2r.cli._recording import add_recording_arguments
 from s2r.cli.depth_stream_cmd import (
     add_stream_arguments,
@@ -147,8 +147,7 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if args.alpha is not None and not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
-    if args.jobs < 1:
-        raise DepthError(f"must be at least 1, got {args.jobs}", field="--jobs/--workers", hint="e.g. 2")
+    check_jobs(args.jobs, DepthError)
     if args.fov is not None and not 10.0 <= args.fov <= 170.0:  # NaN fails too
         raise DepthError(f"must be 10-170 degrees, got {args.fov}", field="--fov", hint="e.g. --fov 90")
     args.colour_range = _colour_range(args.colour_range)

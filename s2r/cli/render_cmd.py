@@ -9,8 +9,10 @@ from typing import TYPE_CHECKING, Any
 from s2r.cli._common import (
     ProgressBar,
     add_force,
+    add_jobs,
     add_json,
     argparse_type,
+    check_jobs,
     load_profile,
     parse_distances,
     parse_pattern,
@@ -44,7 +46,7 @@ def _common(parser: argparse.ArgumentParser, *, scene_alias: bool = False) -> No
                         "8-bit range, before rounding (the sensor model's image_noise_dn; default 0)")
     parser.add_argument("--right-gain", type=float, default=1.0, metavar="G",
                         help="right camera gain relative to the left (default 1.0)")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    add_jobs(parser, default=None, help="worker processes (default: all cores)")
     parser.add_argument("--sensor-model", type=Path, default=None, metavar="FILE",
                         help="blur and grey-level noise of this sensor.yaml (s2r sensor fit) on both images; default "
                         "the profile's own sensor: section")
@@ -126,6 +128,7 @@ def _sensor(args: argparse.Namespace) -> SensorModel | None:
 def _cmd_boards(args: argparse.Namespace) -> int:
     from s2r.render import render_board_set
 
+    check_jobs(args.jobs, RenderError)
     profile = load_profile(args.profile)
     target = None
     if args.target is not None:
@@ -156,6 +159,7 @@ def _cmd_boards(args: argparse.Namespace) -> int:
 def _cmd_scene(args: argparse.Namespace) -> int:
     from s2r.render import check_output_dir, render_scene, write_scene
 
+    check_jobs(args.jobs, RenderError)
     profile = load_profile(args.profile)
     check_output_dir(args.out, force=args.force)
     bar = ProgressBar(enabled=None if not args.quiet else False)

@@ -15,8 +15,10 @@ from typing import Any
 from s2r.cli._common import (
     ProgressBar,
     add_force,
+    add_jobs,
     add_json,
     argparse_type,
+    check_jobs,
     load_profile,
     parse_distances,
     parse_pattern,
@@ -48,7 +50,7 @@ def register(sub: Any) -> None:
                         help="fewer board views (1x) and planes, no slanted plane (about 34 s of CPU time for two "
                         "profiles)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered boards and textures")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: cores)")
+    add_jobs(parser, default=None, help="parallel processes (default: cores)")
     parser.add_argument("--preset", default="profile",
                         help="depth pipeline preset for both profiles (profile, seed-sgbm, fast, bm, ros-default)")
     parser.add_argument("--distances", metavar="M,M,...", help="plane distances in metres (default by mode)")
@@ -87,8 +89,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     from s2r.validate.summary import summary_lines
     from s2r.validate.tolerances import load_tolerances
 
-    if args.jobs is not None and args.jobs < 1:
-        raise ValidateError(f"must be at least 1, got {args.jobs}", field="--jobs")
+    check_jobs(args.jobs, ValidateError)
     if args.seed < 0:  # numpy's generators take non-negative seeds only (was an internal error)
         raise ValidateError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     tolerances = load_tolerances(args.tolerances)

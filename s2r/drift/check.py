@@ -13,13 +13,17 @@ needed); every report says so.
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
+import os
+from collections import deque
+from collections.abc import Iterable, Iterator, Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from s2r.cvpool import opencv_pool
 from s2r.drift.estimate import Estimate, MatchSet, estimate_rotation
 from s2r.drift.matches import FrameMatches, RawMatches, detection_scale, gate_matches, match_frame
 from s2r.drift.model import predict_right, robust_scale
@@ -186,8 +190,6 @@ def _cannot_tell(matches: int, frames: Sequence[FrameMatches], settings: CheckSe
     return why + ": record scenes with texture at several depths, camera still"
 
 
-
-
 @dataclass
 class Checked:
     """A finished check with what it was made of: the profile as given, the matched frames (raw matches kept, so
@@ -234,17 +236,49 @@ def _downscale_note(size: tuple[int, int]) -> str:
     return note
 
 
+_Task = tuple[StereoProfile, StereoRectification, str, NDArray[np.uint8], NDArray[np.uint8]]
+
+
+def _match_task(task: _Task) -> FrameMatches:
+    """One pair's matches (a worker function: one picklable argument)."""
+    return match_frame(task[0], task[1], task[3], task[4], name=task[2])
+
+
 def match_pairs(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
-                progress: ProgressCallback | None = None, total: int | None = None) -> list[FrameMatches]:
-    """Matched frames of raw grey pairs ``(name, left, right)`` for ``profile`` (turned for a vertical rig)."""
+                progress: ProgressCallback | None = None, total: int | None = None, jobs: int = 1
+                ) -> list[FrameMatches]:
+    """Matched frames of raw grey pairs ``(name, left, right)`` for ``profile`` (turned for a vertical rig), in
+    input order. With ``jobs`` > 1 the pairs are matched in that many worker processes (OpenCV single-threaded,
+    :func:`s2r.cvpool.opencv_pool`), at most ``2 * jobs`` pairs in flight, so a long recording is never all in
+    memory; the matches are the same as in one process.
+    """
     working, rect, turn = _working(profile)
+
+    def tasks() -> Iterator[_Task]:
+        for name, left, right in pairs:
+            check_image_sizes(profile, name, left, right)
+            if turn is not None:
+                left, right = turn.image(left), turn.image(right)
+            yield working, rect, name, left, right
+
     frames: list[FrameMatches] = []
-    for k, (name, left, right) in enumerate(pairs, start=1):
-        check_image_sizes(profile, name, left, right)
-        if turn is not None:
-            left, right = turn.image(left), turn.image(right)
-        frames.append(match_frame(working, rect, left, right, name=name))
-        report(progress, k, total or k, "matching features")
+
+    def done(frame: FrameMatches) -> None:
+        frames.append(frame)
+        report(progress, len(frames), total or len(frames), "matching features")
+    if jobs <= 1:
+        for task in tasks():
+            done(_match_task(task))
+        return frames
+    with opencv_pool(jobs) as pool:
+        pool.submit(os.getpid).result()  # forks every worker now, before a reader or progress thread exists
+        pending: deque[Future[FrameMatches]] = deque()
+        for task in tasks():
+            pending.append(pool.submit(_match_task, task))
+            while len(pending) >= 2 * jobs:
+                done(pending.popleft().result())
+        while pending:
+            done(pending.popleft().result())
     return frames
 
 
@@ -263,16 +297,17 @@ def regated(profile: StereoProfile, frames: Sequence[FrameMatches]) -> list[Fram
 
 def check_drift(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
                 settings: CheckSettings = CheckSettings(), progress: ProgressCallback | None = None,
-                total: int | None = None) -> DriftResult:
-    """Check ``profile`` against raw grey stereo pairs ``(name, left, right)`` of ordinary scenes."""
-    return run_check(profile, pairs, settings=settings, progress=progress, total=total).result
+                total: int | None = None, jobs: int = 1) -> DriftResult:
+    """Check ``profile`` against raw grey stereo pairs ``(name, left, right)`` of ordinary scenes (matched in
+    ``jobs`` processes, see :func:`match_pairs`)."""
+    return run_check(profile, pairs, settings=settings, progress=progress, total=total, jobs=jobs).result
 
 
 def run_check(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
               settings: CheckSettings = CheckSettings(), progress: ProgressCallback | None = None,
-              total: int | None = None) -> Checked:
+              total: int | None = None, jobs: int = 1) -> Checked:
     """:func:`check_drift`, keeping the matched frames (for ``--fix`` and its re-check on held-out frames)."""
-    frames = match_pairs(profile, pairs, progress=progress, total=total)
+    frames = match_pairs(profile, pairs, progress=progress, total=total, jobs=jobs)
     result = summarise(profile, frames, settings=settings)
     return Checked(profile, frames, result)
 

@@ -20,8 +20,8 @@ def _subparser(parser: argparse.ArgumentParser, *path: str) -> argparse.Argument
     return parser
 
 
-@pytest.mark.parametrize("command", [("depth",), ("calibrate",), ("render", "boards"), ("validate",),
-                                     ("fleet", "check")])
+@pytest.mark.parametrize("command", [("depth",), ("calibrate",), ("render", "boards"), ("render", "scene"),
+                                     ("validate",), ("check",), ("fleet", "check")])
 def test_parallelism_is_jobs_everywhere_and_workers_is_hidden(command: tuple[str, ...]) -> None:
     sub = _subparser(build_parser(), *command)
     options = {s for a in sub._actions if a.help != argparse.SUPPRESS for s in a.option_strings}
@@ -42,6 +42,26 @@ def test_depth_and_fleet_take_jobs_and_the_workers_alias(name: str) -> None:
 def test_a_bad_job_count_names_both_spellings(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["depth", "realsense_d435_848x480", "a.png", "b.png", "-o", str(tmp_path / "o"), name, "0"]) == 2
     assert "--jobs/--workers: must be at least 1, got 0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [
+    ["depth", "realsense_d435_848x480", "a.png", "b.png", "-o", "OUT/o"],
+    ["calibrate", "IN", "--pattern", "9x6", "--square", "0.025", "-o", "OUT/c.yaml"],
+    ["check", "realsense_d435_848x480", "IN"],
+    ["render", "boards", "realsense_d435_848x480", "-o", "OUT/b"],
+    ["render", "scene", "realsense_d435_848x480", "-o", "OUT/s"],
+    ["validate", "realsense_d435_848x480", "realsense_d435_848x480"],
+    ["fleet", "check", "IN/fleet.yaml", "-o", "OUT/f"],
+])
+def test_every_command_refuses_a_bad_job_count_in_the_same_words(argv: list[str], tmp_path: Path,
+                                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "IN").mkdir()
+    argv = [a.replace("OUT", str(tmp_path)).replace("IN", str(tmp_path / "IN")) for a in argv]
+    assert main([*argv, "--jobs", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --jobs/--workers: must be at least 1, got 0 (e.g. --jobs 2)")
+    assert "Traceback" not in err
+    assert not any((tmp_path / n).exists() for n in ("o", "c.yaml", "b", "s", "f"))
 
 
 def test_check_takes_profile_as_an_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

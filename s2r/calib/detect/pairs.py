@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.calib.detect.stream import CornerCache, Detection, DetectItem, detect_stream
-from s2r.calib.detect.workers import worker_pool
+from s2r.cvpool import opencv_pool
 from s2r.errors import CalibrationError
 from s2r.fileio import sha256_file
 from s2r.progress import ProgressCallback
@@ -78,7 +78,7 @@ class PairDetection:
         cache = CornerCache(cache_dir) if cache_dir is not None else None
         pool = None
         if jobs > 1 and self.left:
-            pool = self._workers.enter_context(worker_pool(jobs))
+            pool = self._workers.enter_context(opencv_pool(jobs))
             pool.submit(os.getpid).result()  # forks every worker now, from this thread (see the module doc)
         self._thread = threading.Thread(target=self._run, args=(jobs, cache, progress, pool),
                                         name="s2r-detection", daemon=True)

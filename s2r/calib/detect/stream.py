@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from s2r.calib.detect import cache
 from s2r.calib.detect.chessboard import detect_board
-from s2r.calib.detect.workers import worker_pool
+from s2r.cvpool import opencv_pool
 from s2r.errors import S2RError
 from s2r.fileio import atomic_write_text
 from s2r.imageio import decode_image_file
@@ -216,7 +216,7 @@ def detect_stream(items: Iterable[DetectItem], *, pattern: tuple[int, int], jobs
             elif jobs <= 1:
                 pending.append(_detect_item(item, pattern, target))
             else:
-                pool = pool or workers.enter_context(worker_pool(jobs))
+                pool = pool or workers.enter_context(opencv_pool(jobs))
                 future = pool.submit(_detect_item, item, pattern, target)
                 future.add_done_callback(store)
                 pending.append(future)

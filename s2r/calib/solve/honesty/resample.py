@@ -17,7 +17,7 @@ solve (:func:`s2r.calib.solve.solvers.joint.solve_joint`, same outlier rules: co
 - **Lens-model choice**: the same folds for every candidate model (warm-started from the chosen model's fit),
   scored by the stereo held-out error.
 
-The fold solves run in parallel in s2r's process pool (:func:`s2r.calib.detect.workers.worker_pool` over
+The fold solves run in parallel in s2r's process pool (:func:`s2r.cvpool.opencv_pool` over
 :func:`s2r.executor.local_pool`, the one executor seam).
 """
 
@@ -31,11 +31,11 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.calib.detect.workers import worker_pool
 from s2r.calib.solve.solvers.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, JointInit, JointSolution, solve_joint
 from s2r.calib.solve.solvers.jointterms import Masks, all_residuals, normal_equations, prepare
 from s2r.calib.solve.solvers.jointterms import State as SolveState
 from s2r.calib.solve.solvers.observations import StereoObservation
+from s2r.cvpool import opencv_pool
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel
 
@@ -217,7 +217,7 @@ def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | N
         extra = None if side is None else side()
         more = [] if extra is None or then is None else then(extra)
         return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
-    with worker_pool(min(jobs, len(tasks))) as pool:
+    with opencv_pool(min(jobs, len(tasks))) as pool:
         side_future = None if side is None else pool.submit(side)
         futures = [pool.submit(run_fold, t) for t in tasks]
         extra = None if side_future is None else side_future.result()
