@@ -139,7 +139,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     bar = ProgressBar(enabled=not (args.quiet or args.json))
     pairs = read_pairs(source, sizes=profile_sizes(profile))
     checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames,
-                        jobs=args.jobs or os.cpu_count() or 1)
+                        jobs=min(args.jobs or os.cpu_count() or 1, source.max_frames))  # no idle workers
     result = checked.result
     steps = _next_steps(args, result)
     if args.json:
