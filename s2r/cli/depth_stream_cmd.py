@@ -143,8 +143,10 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     m = pipeline.profile.matcher
     depth_range = None if args.keep_out_of_range else (m.min_depth_m, m.max_depth_m)
     seen: dict[str, Any] = {}
+    # the inputs are listed first: an output folder holding one (through a symlinked subfolder too) is refused
+    # before --force moves it aside
+    frames, described, source = _frames(args, pipeline)
     with open_writer(args.to, args.output, pipeline, force=args.force, options=options) as writer:
-        frames, described, source = _frames(args, pipeline)
         stream = _noting(pipeline.stream(frames, workers=args.jobs, depth_range_m=depth_range), seen)
         count = write_stream(writer, stream, progress=ProgressBar(enabled=None if not args.quiet else False))
         published = writer.publish()

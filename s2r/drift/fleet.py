@@ -31,6 +31,7 @@ Each row carries ``recording``: where it was read, the number of pairs and a SHA
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import tempfile
 from collections.abc import Iterator
@@ -45,7 +46,7 @@ from s2r.drift.report import check_report_html
 from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
-from s2r.fileio import TEMP_PREFIX, read_text_file
+from s2r.fileio import TEMP_PREFIX, protect_input, read_text_file
 from s2r.names import NAME_HINT, is_safe_name
 from s2r.progress import ProgressCallback, report
 from s2r.recordings.remote import RemoteError, check_url, is_url
@@ -164,7 +165,22 @@ def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 2
         seen.add(name.lower())
         jobs.append(RobotJob(name, _profile(base, entry["profile"], f"{where}.profile", path),
                              _source(base, entry["recording"], f"{where}.recording", path, max_frames), settings))
+        _protect(jobs[-1])
     return jobs
+
+
+def _protect(job: RobotJob) -> None:
+    """The robot's profile and recording are inputs of the run: ``-o DIR --force`` never replaces a folder holding
+    them (the workers would find them gone, and the old folder is removed once the run is published)."""
+    from s2r.registry import resolve_profile
+
+    with contextlib.suppress(S2RError):  # a bad profile is the robot's failure, reported by its worker
+        protect_input(resolve_profile(job.profile))
+    given = [] if isinstance(job.source, RemoteRecording) else [getattr(job.source, k) for k in
+                                                                 ("folder", "bag", "left_glob", "right_glob")]
+    for value in given:
+        if value is not None:
+            protect_input(value)
 
 
 def _one_thread_per_worker() -> None:
