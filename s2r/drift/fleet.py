@@ -43,7 +43,7 @@ from s2r.drift.check import CheckSettings, check_drift
 from s2r.drift.fleet_remote import RemoteRecording, local_source
 from s2r.drift.fleet_store import Journal, job_key
 from s2r.drift.report import check_report_html
-from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs
+from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs, skipped_fields
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
 from s2r.fileio import TEMP_PREFIX, protect_input, read_text_file
@@ -209,16 +209,16 @@ def _identified(pairs: Iterator[GreyPair], identity: dict[str, Any]) -> Iterator
         yield name, left, right
 
 
-def _check(job: RobotJob, identity: dict[str, Any]) -> Any:
+def _check(job: RobotJob, identity: dict[str, Any], skipped: list[str]) -> Any:
     from s2r.registry import load_profile
 
     profile = load_profile(job.profile)
     if isinstance(job.source, RemoteRecording):  # read by this worker into a copy that goes with the check
         with tempfile.TemporaryDirectory(prefix=TEMP_PREFIX) as tmp:
             source = local_source(job.source, Path(tmp))
-            pairs = _identified(read_pairs(source, sizes=profile_sizes(profile)), identity)
+            pairs = _identified(read_pairs(source, sizes=profile_sizes(profile), skipped=skipped), identity)
             return check_drift(profile, pairs, settings=job.settings)
-    pairs = _identified(read_pairs(job.source, sizes=profile_sizes(profile)), identity)
+    pairs = _identified(read_pairs(job.source, sizes=profile_sizes(profile), skipped=skipped), identity)
     return check_drift(profile, pairs, settings=job.settings)
 
 
@@ -230,8 +230,9 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
     """
     _one_thread_per_worker()
     identity: dict[str, Any] = {"source": job.source.describe(), "pairs": 0, "sha256": None}
+    skipped: list[str] = []
     try:
-        result = _check(job, identity)
+        result = _check(job, identity, skipped)
     except S2RError as exc:
         return {"name": job.name, "verdict": "failed", "reasons": [exc.one_line()], "html": None,
                 "recording": identity}
@@ -239,7 +240,7 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
         detail = " ".join(str(exc).split())[:200]
         return {"name": job.name, "verdict": "failed", "html": None, "recording": identity,
                 "reasons": [f"internal error ({type(exc).__name__}: {detail}); this is a bug in s2r"]}
-    return {"name": job.name, **result.as_dict(), "recording": identity,
+    return {"name": job.name, **result.as_dict(), **skipped_fields(skipped), "recording": identity,
             "html": check_report_html(result, source=job.source.describe())}
 
 
