@@ -236,9 +236,9 @@ def entry() -> NoReturn:
     os._exit(code)
 
 
-#: Argument destinations that name what a command writes (-o/--output/--out, --report): every other path
-#: argument is an input, which no output may be or replace (fileio.protecting_inputs).
-_OUTPUT_DESTS = frozenset({"output", "out", "report"})
+#: Argument destinations that name what a command writes (-o/--output/--out, --report, sensor fit's --profile-out):
+#: every other path argument is an input, which no output may be or replace (fileio.protecting_inputs).
+_OUTPUT_DESTS = frozenset({"output", "out", "report", "profile_out"})
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -92,6 +92,16 @@ def test_calibrate_still_writes_a_new_file_into_its_input_folder(ocv: Path) -> N
     assert main(["-q", "calibrate", "ocv", "-o", "ocv/calib.yaml", *BOARD, "--force"]) == 0  # not an input
 
 
+def test_sensor_fit_replaces_its_profile_out_with_force(ocv: Path) -> None:
+    """--profile-out is an output: an existing file there is replaced with --force (it was refused as an input)."""
+    (ocv.parent / "p2.yaml").write_text("old")
+    assert main(["-q", "calibrate", "ocv", "-o", "calib.yaml", *BOARD, "--max-frames", "6"]) == 0
+    glob = ["--left", "ocv/left0[12].jpg", "--right", "ocv/right0[12].jpg"]
+    assert main(["-q", "sensor", "fit", "calib.yaml", *glob, *BOARD, "-o", "s.yaml", "--profile-out", "p2.yaml",
+                 "--force"]) == 0
+    assert (ocv.parent / "p2.yaml").read_text() != "old"
+
+
 def test_depth_check_and_sensor_fit_never_write_over_an_image_they_read(known: dict[str, Any], tmp_path: Path,
                                                                        capsys: pytest.CaptureFixture[str]) -> None:
     rec = tmp_path / "rec"
