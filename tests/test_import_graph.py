@@ -35,7 +35,7 @@ CV2_HOMES = {"lens", "cvpool", "calib", "depth", "render", "rectification", "ima
 #: first: a part may import parts of its own layer or a lower one. Every part must be listed, so a new module says
 #: where it belongs. calib's stages are tests/calib/test_layout.py's.
 INNER: dict[str, list[set[str]]] = {
-    "fileio": [{"outputs", "reading"}, {"atomic"}],
+    "fileio": [{"inputs", "reading"}, {"outputs"}, {"atomic"}],
     "profile": [{"base"}, {"camera", "settings"}, {"rig"}],
     "lens": [{"distortion", "fold", "models"}],
     "sensor": [{"model", "depth_files"}, {"depth", "files", "images"}, {"fit"}],

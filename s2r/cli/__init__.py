@@ -236,19 +236,19 @@ def entry() -> NoReturn:
     os._exit(code)
 
 
-#: Argument destinations that name what a command writes (-o/--output/--out, --report): every other path
-#: argument is an input, which no output may be or replace (fileio.protect_inputs).
-_OUTPUT_DESTS = frozenset({"output", "out", "report"})
+#: Argument destinations that name what a command writes (-o/--output/--out, --report, sensor fit's --profile-out):
+#: every other path argument is an input, which no output may be or replace (fileio.protecting_inputs).
+_OUTPUT_DESTS = frozenset({"output", "out", "report", "profile_out"})
 
 
 def _run(args: argparse.Namespace) -> int:
-    from s2r.fileio import protect_inputs, removing_new_folders_on_failure
+    from s2r.fileio import protecting_inputs, removing_new_folders_on_failure
 
     given = [v for dest, value in vars(args).items() if dest not in _OUTPUT_DESTS
              for v in (value if isinstance(value, list) else [value])]
-    protect_inputs([v for v in given if isinstance(v, (str, os.PathLike))])  # --force never replaces their folder
-    try:
-        with removing_new_folders_on_failure():  # a refused run leaves no empty -o / --report folder behind
+    paths = [v for v in given if isinstance(v, (str, os.PathLike))]
+    try:  # no output is an input: neither written over nor its folder replaced by --force
+        with protecting_inputs(paths), removing_new_folders_on_failure():  # a refused run leaves no empty folder
             code: int = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the boundary, not at interpreter exit
     except BrokenPipeError:

@@ -122,7 +122,7 @@ def _source(args: argparse.Namespace) -> Any:
 
 def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.check import run_check
-    from s2r.drift.source import profile_sizes, read_pairs
+    from s2r.drift.source import profile_sizes, read_pairs, skipped_fields
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
     _profile_and_folder(args)
@@ -137,13 +137,14 @@ def _cmd_check(args: argparse.Namespace) -> int:
     if args.report is not None:
         prepare_output_dir(args.report, force=args.force)
     bar = ProgressBar(enabled=not (args.quiet or args.json))
-    pairs = read_pairs(source, sizes=profile_sizes(profile))
+    skipped: list[str] = []
+    pairs = read_pairs(source, sizes=profile_sizes(profile), skipped=skipped)
     checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames,
                         jobs=min(args.jobs or os.cpu_count() or 1, source.max_frames))  # no idle workers
     result = checked.result
     steps = _next_steps(args, result)
     if args.json:
-        print_json({**result.as_dict(), "next_steps": steps})
+        print_json({**result.as_dict(), **skipped_fields(skipped), "next_steps": steps})
     else:
         print("\n".join([*_summary(result), *(f"  next: {s}" for s in steps)]))
     if args.report is not None:

@@ -143,8 +143,10 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     m = pipeline.profile.matcher
     depth_range = None if args.keep_out_of_range else (m.min_depth_m, m.max_depth_m)
     seen: dict[str, Any] = {}
+    # the inputs are listed first: an output folder holding one (through a symlinked subfolder too) is refused
+    # before --force moves it aside
+    frames, described, source = _frames(args, pipeline)
     with open_writer(args.to, args.output, pipeline, force=args.force, options=options) as writer:
-        frames, described, source = _frames(args, pipeline)
         stream = _noting(pipeline.stream(frames, workers=args.jobs, depth_range_m=depth_range), seen)
         count = write_stream(writer, stream, progress=ProgressBar(enabled=None if not args.quiet else False))
         published = writer.publish()
@@ -154,7 +156,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     if synthesized:
         log.warning("the input carries no time stamps (still files): stamps were synthesized, 1 s + 0.1 s per frame "
                     "(frames.csv / the bag say so)")
-    stamps = "synthesized" if synthesized else _stamp_origin(source)
+    stamps = "synthesized" if synthesized else _stamp_origin(seen)
     summary = {"profile": pipeline.profile.name, "preset": pipeline.preset, "to": args.to, "frames": count,
                "input": described, "output": str(args.output), "frame_id": seen.get("frame_id"),
                "stamps": stamps, "published": [str(p) for p in published],
@@ -168,24 +170,26 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     return 0
 
 
-def _stamp_origin(source: Any) -> str:
+def _stamp_origin(seen: dict[str, Any]) -> str:
     """'recorded', or 'file time' for a video without --start-stamp: its frames are stamped from the file's
-    modification time, which a copy may have changed (warned, so a wrong absolute time is not taken as recorded)."""
-    from s2r.recordings.video import TwoVideoFrames, VideoFrames
+    modification time, which a copy may have changed (warned, so a wrong absolute time is not taken as recorded).
+    The frames' own ``stamp_source`` (frames.csv says the same per row)."""
+    from s2r.recordings.frames import STAMP_FILE_TIME, STAMP_RECORDED
 
-    if not isinstance(source, (VideoFrames, TwoVideoFrames)) or source.start_ns is not None:
-        return "recorded"
+    if STAMP_FILE_TIME not in seen.get("stamp_sources", ()):
+        return STAMP_RECORDED
     log.warning("the video's stamps start at its file's modification time (a copy may have changed it): pass "
                 "--start-stamp TIME (when the recording began) for true absolute stamps")
-    return "file time"
+    return STAMP_FILE_TIME
 
 
 def _noting(frames: Iterator[DepthFrame], seen: dict[str, Any]) -> Iterator[DepthFrame]:
-    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame) and whether
-    any stamp was synthesized."""
+    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame), whether
+    any stamp was synthesized and where the stamps come from."""
     from s2r.depth.stream import rectified_frame_id
 
     for frame in frames:
         seen.setdefault("frame_id", rectified_frame_id(frame.frame_id))
         seen["synthesized"] = seen.get("synthesized", False) or frame.stamp_synthesized
+        seen.setdefault("stamp_sources", set()).add(frame.stamp_source)
         yield frame

@@ -14,7 +14,7 @@ from s2r.depth.outputs import IMAGE_SUFFIXES, read_image, write_outputs
 from s2r.depth.pipeline import StereoPipeline
 from s2r.depth.stream import depth_frames
 from s2r.errors import DepthError
-from s2r.fileio import OutputBatch
+from s2r.fileio import OutputBatch, protect_read_files
 from s2r.progress import ProgressCallback, report
 from s2r.recordings.frames import StereoFrame
 
@@ -24,7 +24,9 @@ __all__ = ["frame_prefix", "pair_frames", "pair_images", "run_sequence"]
 def _images(folder: Path, field: str) -> list[Path]:
     if not folder.is_dir():
         raise DepthError("not a folder", path=folder, field=field, hint="pass a folder of images")
-    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    images = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    protect_read_files(images)  # inputs of the running command: no output may be one of them
+    return images
 
 
 def pair_images(left_dir: str | Path, right_dir: str | Path) -> list[tuple[Path, Path]]:

@@ -34,7 +34,8 @@ from s2r.recordings.frames import StereoFrame
 if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
 
-__all__ = ["SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids", "rectified_frame_id"]
+__all__ = ["STAMP_SYNTHESIZED", "SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids",
+           "rectified_frame_id"]
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +43,7 @@ log = logging.getLogger(__name__)
 #: every output says so (``stamp_source: synthesized``).
 SYNTHETIC_START_NS = 1_000_000_000
 SYNTHETIC_PERIOD_NS = 100_000_000
+STAMP_SYNTHESIZED = "synthesized"
 
 
 @dataclass(frozen=True)
@@ -51,7 +53,9 @@ class DepthFrame:
     Attributes:
         index, name, source: the input frame's (see :class:`s2r.recordings.StereoFrame`).
         stamp_ns: the input left image's stamp in nanoseconds, or a synthesized one (``stamp_synthesized``).
-        stamp_synthesized: True when the input had no time (still files).
+        stamp_source: where ``stamp_ns`` comes from: the input frame's ``stamp_source`` (``recorded``, or ``file
+            time`` for a video stamped from its file's modification time), or :data:`STAMP_SYNTHESIZED` when the
+            input had no time (still files).
         frame_id: the left camera's optical frame (never empty); outputs are labelled with
             :func:`rectified_frame_id` of it.
         result: the depth, in the rectified left camera's grid and frame.
@@ -61,9 +65,14 @@ class DepthFrame:
     name: str
     source: str
     stamp_ns: int
-    stamp_synthesized: bool
+    stamp_source: str
     frame_id: str
     result: DepthResult
+
+    @property
+    def stamp_synthesized(self) -> bool:
+        """Whether the input had no time (still files) and ``stamp_ns`` was made up."""
+        return self.stamp_source == STAMP_SYNTHESIZED
 
 
 def frame_ids(profile_left: str, profile_right: str, input_frame_id: str, profile_name: str) -> tuple[str, str]:
@@ -90,14 +99,15 @@ def rectified_frame_id(optical: str) -> str:
     return optical + "_rect"
 
 
-def _stamp(frame: StereoFrame, previous: int | None) -> tuple[int, bool]:
-    """The frame's stamp (ns) and whether it was synthesized; recorded stamps must not run backwards."""
+def _stamp(frame: StereoFrame, previous: int | None) -> tuple[int, str]:
+    """The frame's stamp (ns) and where it comes from (``synthesized`` for still files); recorded stamps must not
+    run backwards."""
     if frame.stamp_ns is None:
-        return SYNTHETIC_START_NS + frame.index * SYNTHETIC_PERIOD_NS, True
+        return SYNTHETIC_START_NS + frame.index * SYNTHETIC_PERIOD_NS, STAMP_SYNTHESIZED
     if previous is not None and frame.stamp_ns < previous:
         log.warning("%s: stamp %d runs backwards (previous %d); kept as recorded", frame.source, frame.stamp_ns,
                     previous)
-    return int(frame.stamp_ns), False
+    return int(frame.stamp_ns), frame.stamp_source
 
 
 def _compute(pipeline: StereoPipeline, read: Future[StereoFrame | None],
@@ -147,13 +157,13 @@ def depth_frames(pipeline: StereoPipeline, frames: Iterable[StereoFrame], *, wor
             if done is None:
                 return
             frame, result = done
-            stamp, synthesized = _stamp(frame, previous)
+            stamp, stamp_source = _stamp(frame, previous)
             previous = stamp
             if frame.frame_id not in ids:
                 ids[frame.frame_id] = frame_ids(pipeline.profile.left.frame_id, "", frame.frame_id,
                                                 pipeline.profile.name)[0]
             yield DepthFrame(index=frame.index, name=frame.name, source=frame.source, stamp_ns=stamp,
-                             stamp_synthesized=synthesized, frame_id=ids[frame.frame_id], result=result)
+                             stamp_source=stamp_source, frame_id=ids[frame.frame_id], result=result)
     finally:
         for pool in (reader, computer):
             pool.shutdown(wait=True, cancel_futures=True)

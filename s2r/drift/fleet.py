@@ -31,6 +31,7 @@ Each row carries ``recording``: where it was read, the number of pairs and a SHA
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import tempfile
 from collections.abc import Iterator
@@ -42,10 +43,10 @@ from s2r.drift.check import CheckSettings, check_drift
 from s2r.drift.fleet_remote import RemoteRecording, local_source
 from s2r.drift.fleet_store import Journal, job_key
 from s2r.drift.report import check_report_html
-from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs
+from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs, skipped_fields
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
-from s2r.fileio import TEMP_PREFIX, read_text_file
+from s2r.fileio import TEMP_PREFIX, protect_input, read_text_file
 from s2r.names import NAME_HINT, is_safe_name
 from s2r.progress import ProgressCallback, report
 from s2r.recordings.remote import RemoteError, check_url, is_url
@@ -164,7 +165,22 @@ def load_fleet(path: str | Path, *, settings: CheckSettings, max_frames: int = 2
         seen.add(name.lower())
         jobs.append(RobotJob(name, _profile(base, entry["profile"], f"{where}.profile", path),
                              _source(base, entry["recording"], f"{where}.recording", path, max_frames), settings))
+        _protect(jobs[-1])
     return jobs
+
+
+def _protect(job: RobotJob) -> None:
+    """The robot's profile and recording are inputs of the run: ``-o DIR --force`` never replaces a folder holding
+    them (the workers would find them gone, and the old folder is removed once the run is published)."""
+    from s2r.registry import resolve_profile
+
+    with contextlib.suppress(S2RError):  # a bad profile is the robot's failure, reported by its worker
+        protect_input(resolve_profile(job.profile))
+    given = [] if isinstance(job.source, RemoteRecording) else [getattr(job.source, k) for k in
+                                                                 ("folder", "bag", "left_glob", "right_glob")]
+    for value in given:
+        if value is not None:
+            protect_input(value)
 
 
 def _one_thread_per_worker() -> None:
@@ -193,16 +209,16 @@ def _identified(pairs: Iterator[GreyPair], identity: dict[str, Any]) -> Iterator
         yield name, left, right
 
 
-def _check(job: RobotJob, identity: dict[str, Any]) -> Any:
+def _check(job: RobotJob, identity: dict[str, Any], skipped: list[str]) -> Any:
     from s2r.registry import load_profile
 
     profile = load_profile(job.profile)
     if isinstance(job.source, RemoteRecording):  # read by this worker into a copy that goes with the check
         with tempfile.TemporaryDirectory(prefix=TEMP_PREFIX) as tmp:
             source = local_source(job.source, Path(tmp))
-            pairs = _identified(read_pairs(source, sizes=profile_sizes(profile)), identity)
+            pairs = _identified(read_pairs(source, sizes=profile_sizes(profile), skipped=skipped), identity)
             return check_drift(profile, pairs, settings=job.settings)
-    pairs = _identified(read_pairs(job.source, sizes=profile_sizes(profile)), identity)
+    pairs = _identified(read_pairs(job.source, sizes=profile_sizes(profile), skipped=skipped), identity)
     return check_drift(profile, pairs, settings=job.settings)
 
 
@@ -214,8 +230,9 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
     """
     _one_thread_per_worker()
     identity: dict[str, Any] = {"source": job.source.describe(), "pairs": 0, "sha256": None}
+    skipped: list[str] = []
     try:
-        result = _check(job, identity)
+        result = _check(job, identity, skipped)
     except S2RError as exc:
         return {"name": job.name, "verdict": "failed", "reasons": [exc.one_line()], "html": None,
                 "recording": identity}
@@ -223,7 +240,7 @@ def run_robot(job: RobotJob) -> dict[str, Any]:
         detail = " ".join(str(exc).split())[:200]
         return {"name": job.name, "verdict": "failed", "html": None, "recording": identity,
                 "reasons": [f"internal error ({type(exc).__name__}: {detail}); this is a bug in s2r"]}
-    return {"name": job.name, **result.as_dict(), "recording": identity,
+    return {"name": job.name, **result.as_dict(), **skipped_fields(skipped), "recording": identity,
             "html": check_report_html(result, source=job.source.describe())}
 
 

@@ -23,7 +23,7 @@ from s2r.recordings.files import FileFrames
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "spread"]
+__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "skipped_fields", "spread"]
 
 GreyPair = tuple[str, NDArray[np.uint8], NDArray[np.uint8]]
 #: Expected (width, height) px of the left and the right images, or None for any size.
@@ -93,29 +93,44 @@ def _decimated(frames: Iterator[GreyPair], limit: int) -> list[GreyPair]:
     return kept
 
 
-def read_pairs(source: StereoSource, *, sizes: Sizes = None) -> Iterator[GreyPair]:
+def read_pairs(source: StereoSource, *, sizes: Sizes = None, skipped: list[str] | None = None) -> Iterator[GreyPair]:
     """``(name, left, right)`` grey (H, W) uint8 pairs of the recording, at most ``max_frames`` of them.
 
     Args:
         sizes: the profile's ``((w, h) left, (w, h) right)`` px: an image declaring another size is a CheckError
             naming its file (or bag topic and stamp, or video), before it is decoded.
+        skipped: filled, once the pairs are read, with the inputs that had no partner (image files, ``TOPIC @
+            STAMP ns`` bag messages), which were not checked (:func:`skipped_fields` puts them in ``--json``).
     """
     if source.max_frames < 1:
         raise CheckError(f"must be at least 1, got {source.max_frames}", field="--max-frames", hint="e.g. 20")
     recording = open_recording(source.recording, expected_size=sizes, grey=True, error=CheckError)
     if isinstance(recording, FileFrames):
         recording.indices = tuple(spread(len(recording), source.max_frames))
-        return _warning_skipped(((f.name, f.left, f.right) for f in recording.frames()), recording)
-    return _warning_skipped(_spread_stream(recording.frames(), source), recording)
+        return _warning_skipped(((f.name, f.left, f.right) for f in recording.frames()), recording, skipped)
+    return _warning_skipped(_spread_stream(recording.frames(), source), recording, skipped)
 
 
-def _warning_skipped(pairs: Iterator[GreyPair], recording: object) -> Iterator[GreyPair]:
+def _warning_skipped(pairs: Iterator[GreyPair], recording: object, noted: list[str] | None) -> Iterator[GreyPair]:
     """``pairs``, then one warning naming the inputs the recording skipped for want of a partner (as depth and
-    calibrate say): a check on fewer frames than the folder seems to hold says why."""
+    calibrate say): a check on fewer frames than the folder seems to hold says why. They go into ``noted`` too."""
     yield from pairs
-    if skipped := skipped_inputs(recording):
+    skipped = skipped_inputs(recording)
+    if noted is not None:
+        noted[:] = skipped
+    if skipped:
         log.warning("%d input image(s) had no partner and were not checked: %s%s", len(skipped),
-                    ", ".join(skipped[:5]), ", ..." if len(skipped) > 5 else "")
+                    ", ".join(skipped[:_NAMED_SKIPPED]), ", ..." if len(skipped) > _NAMED_SKIPPED else "")
+
+
+#: How many skipped inputs the warning and ``skipped_first`` name.
+_NAMED_SKIPPED = 5
+
+
+def skipped_fields(skipped: list[str]) -> dict[str, Any]:
+    """The ``--json`` keys of the inputs a check skipped for want of a partner, as ``s2r depth`` names them:
+    ``skipped_unpaired`` (how many) and ``skipped_first`` (the first five)."""
+    return {"skipped_unpaired": len(skipped), "skipped_first": skipped[:_NAMED_SKIPPED]}
 
 
 def _spread_stream(frames: Iterator[Any], source: StereoSource) -> Iterator[GreyPair]:

@@ -15,11 +15,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from s2r.errors import OutputExistsError, S2RError
+from s2r.fileio.inputs import held_input, refuse_input_file
 
 log = logging.getLogger(__name__)
 
 __all__ = ["TEMP_PREFIX", "check_output_dir", "check_output_free", "discard_on_failure", "prepare_output_dir",
-           "protect_inputs", "removing_new_folders_on_failure", "warn_leftovers"]
+           "removing_new_folders_on_failure", "warn_leftovers"]
 
 
 class _FailureUndo:
@@ -130,7 +131,8 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
     """Return ``path`` as a Path if s2r may write a regular file there; :class:`OutputExistsError` otherwise.
 
     Refused always: a symlink, a folder, a device node (``/dev/null``), a FIFO or a socket at ``path``
-    (``--force`` never replaces them), and a path under a file. Refused unless ``force``: an existing file.
+    (``--force`` never replaces them), a path under a file, and a file the running command reads (given, or found
+    in an input folder: :mod:`s2r.fileio.inputs`). Refused unless ``force``: an existing file.
     """
     out = Path(path)
     warn_leftovers(out.parent)
@@ -138,9 +140,7 @@ def check_output_free(path: str | Path, *, force: bool) -> Path:
     if st is None:
         return out
     _refuse_special(out, st)
-    if (given := _input_at(out)) is not None:
-        raise OutputExistsError(f"is {given}, an input of this command: nothing was overwritten, even with --force",
-                                path=out, hint="write the output to a file of its own")
+    refuse_input_file(out)  # even with --force: a file this command reads (given, or found in an input folder)
     if not force:
         raise OutputExistsError("already exists; nothing was overwritten", path=out, hint="pass --force to replace it")
     return out
@@ -284,40 +284,6 @@ def prepare_output_dir(path: str | Path, *, force: bool, replace: bool = True) -
     return out
 
 
-#: Paths the running command was given (its inputs, see :func:`protect_inputs`): a folder holding one is never
-#: replaced whole.
-_INPUTS: list[Path] = []
-
-
-def protect_input(path: str | os.PathLike[str]) -> None:
-    """Add one input found on the way (a profile named by ``S2R_PROFILE_PATH``, not typed as a path) to the
-    paths :func:`protect_inputs` keeps from being written over or replaced."""
-    if os.path.lexists(path) and Path(path) not in _INPUTS:
-        _INPUTS.append(Path(path))
-
-
-def _input_at(out: Path) -> Path | None:
-    """The input of this command that ``out`` is (the same file or folder, symlinks followed), if any."""
-    resolved = out.resolve()
-    return next((p for p in _INPUTS if p.resolve() == resolved), None)
-
-
-def protect_inputs(paths: list[str | os.PathLike[str]]) -> None:
-    """Remember the paths a command was given (files, folders, the folder part of a glob): ``--force`` then never
-    replaces an output folder that holds one of them (``-o data --force`` with ``--left-dir data/left`` would
-    remove the recording), nor writes a file over one. The CLI calls it with every path among a command's
-    arguments but its outputs (-o/--output/--report)."""
-    _INPUTS.clear()
-    for given in paths:
-        text = str(given)
-        parts = Path(text).parts
-        magic = next((k for k, part in enumerate(parts) if any(c in part for c in "*?[")), len(parts))
-        if magic < len(parts):  # a glob: its folder part
-            text = str(Path(*parts[:magic])) if magic else "."
-        if text and os.path.lexists(text):
-            _INPUTS.append(Path(text))
-
-
 def _move_aside(out: Path) -> None:
     """Rename the output folder ``out`` to a new ``.s2r-tmp-NAME.*.old`` folder beside it (see
     :func:`prepare_output_dir`); refuse one whose removal would take more than an output with it."""
@@ -329,7 +295,7 @@ def _move_aside(out: Path) -> None:
         raise OutputExistsError("is the working folder, the home folder, a parent of the working folder or a "
                                 "filesystem root: --force would replace it whole; nothing was written", path=out,
                                 hint="give a folder of its own to the output, e.g. -o out/depth")
-    held = _input_at(out) or next((p for p in _INPUTS if resolved in p.resolve().parents), None)
+    held = held_input(out)
     if held is not None:
         raise OutputExistsError(f"holds {held}, an input of this command: --force would replace the folder whole; "
                                 "nothing was written", path=out, hint="write the output to a folder of its own")

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.errors import DepthError
-from s2r.fileio import read_npy
+from s2r.fileio import protect_read_files, read_npy
 from s2r.imageio import decode_image_file
 
 __all__ = ["DEPTH_SUFFIXES", "IMAGE_SUFFIXES", "FramePaths", "list_files", "pair_files", "read_depth", "read_grey"]
@@ -44,7 +44,8 @@ class FramePaths:
 
 
 def list_files(spec: str | Path, suffixes: Sequence[str], *, option: str) -> list[Path]:
-    """Files of a folder (sorted, filtered by ``suffixes``) or of a glob pattern (sorted); DepthError when none."""
+    """Files of a folder (sorted, filtered by ``suffixes``) or of a glob pattern (sorted); DepthError when none.
+    Each is an input of the running command (:func:`s2r.fileio.protect_read_files`)."""
     text = str(spec)
     path = Path(text)
     if path.is_dir():
@@ -61,6 +62,7 @@ def list_files(spec: str | Path, suffixes: Sequence[str], *, option: str) -> lis
     if not files:
         raise DepthError(f"no {'/'.join(suffixes)} files found", path=text, field=option,
                          hint="pass a folder of images or a quoted glob such as 'left*.png'")
+    protect_read_files(files)  # inputs of the running command: no output may be one of them
     return files
 
 

@@ -15,7 +15,7 @@ from pathlib import Path, PurePath
 from typing import Any
 
 from s2r.errors import S2RError
-from s2r.fileio import MAX_TEXT_BYTES, NotARegularFile, read_regular_file
+from s2r.fileio import MAX_TEXT_BYTES, NotARegularFile, protect_read_files, read_regular_file
 from s2r.safeparse import parse_yaml
 
 __all__ = ["bag_storage_files"]
@@ -64,10 +64,13 @@ def _listed(metadata: Path, error: type[S2RError]) -> list[str]:
 def bag_storage_files(bag: Path, *, error: type[S2RError]) -> list[Path]:
     """The files rosbags will read for ``bag``, each checked (see the module docstring); ``error`` otherwise.
 
-    A ``.bag`` file: itself. A folder: its ``metadata.yaml`` and the storage files it lists, in that order.
+    A ``.bag`` file: itself. A folder: its ``metadata.yaml`` and the storage files it lists, in that order. Each
+    is an input of the running command (:func:`s2r.fileio.protect_read_files`).
     """
     info = _regular(bag, folder=None, error=error)
-    if not info.is_dir():
-        return [bag]
-    metadata = _regular(bag / "metadata.yaml", folder=bag, error=error)
-    return [metadata, *(_regular(bag / name, folder=bag, error=error) for name in _listed(metadata, error))]
+    files = [bag]
+    if info.is_dir():
+        metadata = _regular(bag / "metadata.yaml", folder=bag, error=error)
+        files = [metadata, *(_regular(bag / name, folder=bag, error=error) for name in _listed(metadata, error))]
+    protect_read_files(files)  # inputs of the running command: no output may be one of them
+    return files

@@ -9,9 +9,14 @@ from typing import Protocol, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FrameSource", "StereoFrame", "skipped_inputs", "thinned"]
+__all__ = ["STAMP_FILE_TIME", "STAMP_RECORDED", "FrameSource", "StereoFrame", "skipped_inputs", "thinned"]
 
 T = TypeVar("T")
+
+#: Where a frame's stamp comes from (:attr:`StereoFrame.stamp_source`; frames.csv's ``stamp_source`` column, with
+#: ``synthesized`` for still files, which carry no time).
+STAMP_RECORDED = "recorded"
+STAMP_FILE_TIME = "file time"
 
 
 @dataclass(frozen=True)
@@ -31,6 +36,9 @@ class StereoFrame:
         right: right image, the same size and channels as ``left``.
         source: a short human description of where the pair came from (file names, ``bag TOPIC @ STAMP``,
             ``video FILE frame N``), for messages and the output index.
+        stamp_source: where ``stamp_ns`` comes from: :data:`STAMP_RECORDED` (a bag's header stamp; a video's
+            ``--start-stamp`` plus the frame's time in it) or :data:`STAMP_FILE_TIME` (a video's file modification
+            time plus the frame's time: a copy may have moved it); meaningless when ``stamp_ns`` is None.
     """
 
     index: int
@@ -40,6 +48,7 @@ class StereoFrame:
     left: NDArray[np.uint8]
     right: NDArray[np.uint8]
     source: str
+    stamp_source: str = STAMP_RECORDED
 
 
 class FrameSource(Protocol):

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.errors import CalibrationError
+from s2r.fileio import protect_read_files
 
 __all__ = ["IMAGE_SUFFIXES", "PairSet", "find_mono_images", "find_stereo_pairs", "pair_by_number"]
 
@@ -161,7 +162,16 @@ def _expand(pattern: str, side: str) -> list[Path]:
 
 def find_stereo_pairs(folder: Path | None = None, *, left_glob: str | None = None,
                       right_glob: str | None = None) -> PairSet:
-    """Find and pair the stereo images of ``folder`` (or of two globs); see the module docstring."""
+    """Find and pair the stereo images of ``folder`` (or of two globs); see the module docstring.
+
+    Every image found (paired or not) is an input of the running command: no output may be one of them
+    (:func:`s2r.fileio.protect_read_files`)."""
+    pairs = _find_stereo_pairs(folder, left_glob=left_glob, right_glob=right_glob)
+    protect_read_files([*pairs.left, *pairs.right, *pairs.unpaired])
+    return pairs
+
+
+def _find_stereo_pairs(folder: Path | None, *, left_glob: str | None, right_glob: str | None) -> PairSet:
     if left_glob is not None or right_glob is not None:
         if left_glob is None or right_glob is None:
             raise CalibrationError("--left and --right must be given together", field="--left/--right",
@@ -190,7 +200,14 @@ def find_stereo_pairs(folder: Path | None = None, *, left_glob: str | None = Non
 
 
 def find_mono_images(folder: Path | None = None, *, image_glob: str | None = None) -> list[Path]:
-    """Images of one camera: a glob, a folder's ``left/`` subfolder, its ``left*`` files, or all its images."""
+    """Images of one camera: a glob, a folder's ``left/`` subfolder, its ``left*`` files, or all its images (each an
+    input of the running command: :func:`s2r.fileio.protect_read_files`)."""
+    images = _find_mono_images(folder, image_glob=image_glob)
+    protect_read_files(images)
+    return images
+
+
+def _find_mono_images(folder: Path | None, *, image_glob: str | None) -> list[Path]:
     if image_glob is not None:
         return _expand(image_glob, "left")
     if folder is None:

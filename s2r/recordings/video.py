@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from s2r.errors import S2RError
 from s2r.imageio import native_stderr_silenced
 from s2r.recordings.decode import SizeRule, to_uint8
-from s2r.recordings.frames import StereoFrame, thinned
+from s2r.recordings.frames import STAMP_FILE_TIME, STAMP_RECORDED, StereoFrame, thinned
 
 __all__ = ["LAYOUTS", "TwoVideoFrames", "VideoFrames"]
 
@@ -140,6 +140,11 @@ def _halves(frame: NDArray[Any], layout: str) -> tuple[NDArray[Any], NDArray[Any
     return frame[:half], frame[half:]
 
 
+def _stamp_source(start_ns: int | None) -> str:
+    """A video frame's :attr:`StereoFrame.stamp_source`: recorded from ``--start-stamp``, else the file time."""
+    return STAMP_FILE_TIME if start_ns is None else STAMP_RECORDED
+
+
 @dataclass
 class VideoFrames:
     """One video holding both images in ``layout`` ('sbs' or 'tb'); ``every``-th frame, at most ``max_frames``;
@@ -188,7 +193,8 @@ class VideoFrames:
                 left, right = _halves(cap.retrieve(index), self.layout)
                 yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=cap.stamp_ns(index, self.start_ns),
                                   frame_id="", left=to_uint8(left, grey=self.grey),
-                                  right=to_uint8(right, grey=self.grey), source=f"video {self.video} frame {index}")
+                                  right=to_uint8(right, grey=self.grey), source=f"video {self.video} frame {index}",
+                                  stamp_source=_stamp_source(self.start_ns))
         finally:
             cap.release()
 
@@ -245,7 +251,8 @@ class TwoVideoFrames:
                 yield StereoFrame(index=index, name=f"frame_{index:06d}", stamp_ns=left.stamp_ns(index, self.start_ns),
                                   frame_id="", left=to_uint8(left.retrieve(index), grey=self.grey),
                                   right=to_uint8(right.retrieve(index), grey=self.grey),
-                                  source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}")
+                                  source=f"videos {self.left_video.name} + {self.right_video.name} frame {index}",
+                                  stamp_source=_stamp_source(self.start_ns))
         finally:
             left.release()
             right.release()

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.errors import SourceError
-from s2r.fileio import read_text_file
+from s2r.fileio import protect_read_files, read_text_file
 from s2r.geometry import T_LINK_OPTICAL, invert_transform
 from s2r.sources.description import CameraSpec, Description, FloatArray, JointSpec, SkippedInclude
 from s2r.sources.includes import shown
@@ -83,6 +83,8 @@ def load_description(path: str | Path, *, xacro_args: Mapping[str, str] | None =
         raise SourceError("--keyframe is for MuJoCo (MJCF) models", path=source, field="--keyframe",
                           hint="leave it out for URDF / SDF")
     description.source_text, description.expanded_text = text, expanded
+    # the files its includes read are inputs of the running command: no output may be one of them
+    protect_read_files([*description.included_files, *(Path(p) for p, _ in expansion.included)])
     description.simulator = infer_simulator(doc, lines=not uses_xacro)
     KinematicTree(description)  # joint loops are reported before anything else looks at the cameras
     return description

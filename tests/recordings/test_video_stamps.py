@@ -120,3 +120,27 @@ def test_summary_says_when_video_stamps_come_from_the_file_time(tmp_path: Path,
     out, err = capsys.readouterr()
     assert json.loads(out)["stamps"] == "recorded"
     assert "modification time" not in err
+
+
+def test_frames_csv_says_per_row_where_the_stamps_come_from(tmp_path: Path) -> None:
+    """frames.csv's stamp_source agrees with the summary: 'file time' for a video without --start-stamp (stamped
+    from its modification time), 'recorded' with it, 'synthesized' for still files (the column names unchanged)."""
+    from s2r.depth.writers.files import INDEX_COLUMNS
+    from tests.depth.stream_inputs import known_frames, known_rig, write_folder, write_profile
+
+    rig, profile = known_rig()
+    pairs = known_frames(rig, distances_m=(1.1, 1.3))
+    video = write_cv(tmp_path / "rig.avi", [np.hstack([np.dstack([f.left] * 3), np.dstack([f.right] * 3)])
+                                            for f in pairs], fps=5.0)
+    prof = write_profile(profile, tmp_path / "rig.yaml")
+    write_folder(pairs, tmp_path / "stills")
+    runs = {"file time": ["--video", str(video)], "recorded": ["--video", str(video), "--start-stamp", START],
+            "synthesized": [str(tmp_path / "stills")]}
+    for expected, given in runs.items():
+        out = tmp_path / expected.replace(" ", "_")
+        assert main(["-q", "depth", str(prof), *given, "-o", str(out)]) == 0
+        with (out / "frames.csv").open() as handle:
+            table = csv.DictReader(handle)
+            rows = list(table)
+        assert tuple(table.fieldnames or ()) == INDEX_COLUMNS
+        assert [r["stamp_source"] for r in rows] == [expected] * 2

@@ -7,9 +7,10 @@ Layout of OUT (``NAME`` is :attr:`StereoFrame.name`: the left file's stem, a bag
 - ``disparity/NAME.npy``: float32 pixels, NaN invalid; ``color/NAME.png``: JET colouring with a bar in metres;
 - ``points/NAME.ply`` (``--ply``) and ``points/NAME.pcd`` (``--pcd``): the valid points, metres, coloured;
 - ``camera_info.yaml``: the rectified left camera (the frame of everything above);
-- ``frames.csv``: one row per frame: index, name, stamp_ns, stamp_source (``recorded`` or ``synthesized``: still
-  files carry no time), frame_id (the rectified left frame, ``<left>_rect_optical_frame``: the optical frame turned
-  by R1, as a bag's /tf_static says), the input (``source``), the valid fraction and every file written for it.
+- ``frames.csv``: one row per frame: index, name, stamp_ns, stamp_source (``recorded``; ``file time``: a video
+  without ``--start-stamp``, stamped from its file's modification time; ``synthesized``: still files carry no time),
+  frame_id (the rectified left frame, ``<left>_rect_optical_frame``: the optical frame turned by R1, as a bag's
+  /tf_static says), the input (``source``), the valid fraction and every file written for it.
 
 Everything is staged in one :class:`s2r.fileio.OutputBatch` and published together.
 """
@@ -71,7 +72,7 @@ class FilesWriter(StreamWriter):
         depth_png = self.out / f"depth/{name}.png"
         row: dict[str, object] = {
             "index": frame.index, "name": name, "stamp_ns": frame.stamp_ns,
-            "stamp_source": "synthesized" if frame.stamp_synthesized else "recorded",
+            "stamp_source": frame.stamp_source,
             "frame_id": rectified_frame_id(frame.frame_id),
             "source": frame.source, "valid_fraction": f"{float(r.valid.mean()):.6f}",
             "depth_png": self._add(f"depth/{name}.png", png_bytes(depth_to_mm(r.depth), depth_png)),
