@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import sys
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 import numpy as np
@@ -19,7 +21,7 @@ if TYPE_CHECKING:
 
 __all__ = ["ProgressBar", "add_force", "add_jobs", "add_json", "add_profile_positional", "add_recording_inputs",
            "argparse_type", "check_jobs", "check_left_board", "load_profile", "parse_distances", "parse_pattern",
-           "print_json", "profile_argument", "to_jsonable"]
+           "positional_is_profile", "print_json", "profile_argument", "to_jsonable"]
 
 T = TypeVar("T")
 
@@ -60,19 +62,73 @@ def add_profile_positional(parser: argparse.ArgumentParser, *, help: str) -> Non
                         help="the same as the PROFILE positional (an alias kept for older scripts)")
 
 
-def profile_argument(args: argparse.Namespace, *, command: str) -> str:
+def profile_argument(args: argparse.Namespace, *, command: str, shift_to: str | None = "recording") -> str:
     """The profile given by :func:`add_profile_positional`'s positional or ``--profile``; ProfileError when
-    neither or two different ones were given."""
+    neither or two different ones were given.
+
+    With ``--profile`` the PROFILE positional is read as :func:`positional_is_profile` says: the same profile again
+    (dropped), another profile (refused), or the command's next positional (``shift_to``, e.g. the recording FOLDER:
+    ``s2r check --profile P FOLDER``) when that one is free."""
     from s2r.errors import ProfileError
 
     positional, option = args.profile, args.profile_option
     if positional is None and option is None:
         raise ProfileError("missing the profile", field="PROFILE",
                            hint=f"give it first: s2r {command} PROFILE ... (a name or a YAML path)")
-    if positional is not None and option is not None and positional != option:
+    if positional is not None and option is not None:
+        free = shift_to is not None and hasattr(args, shift_to) and getattr(args, shift_to) is None
+        if not positional_is_profile(str(positional), str(option), command=command, strict=not free):
+            setattr(args, str(shift_to), Path(positional))
+        args.profile = None
+    return str(positional if option is None else option)
+
+
+#: Suffixes of profile files (s2r, Kalibr, ROS and OpenCV YAML, OpenCV XML): never an image nor a recording, so such
+#: a positional beside ``--profile`` is a second profile, not an input (RealSense's ``.txt`` is left out: a text
+#: file given as an image is named as an unreadable image).
+PROFILE_SUFFIXES = (".yaml", ".yml", ".xml")
+
+
+def positional_is_profile(positional: str, option: str, *, command: str, strict: bool = False) -> bool:
+    """A positional given beside ``--profile option``: True when it names that same profile (the caller drops it),
+    False when it is no profile (an input: an image, a folder, a bag); ProfileError naming both when it names
+    another profile (a profile file's suffix, or a profile name that is no path here), or with ``strict`` (the
+    command has no other positional to read it as) whenever it is not the same profile.
+
+    The one rule of every command taking both a PROFILE positional and ``--profile`` (check, depth, depth-quality,
+    sensor fit/apply): a YAML profile is never read as an image or a recording."""
+    from s2r.errors import ProfileError
+
+    if _same_profile(positional, option):
+        return True
+    if strict or _looks_like_profile(positional):
         raise ProfileError(f"two profiles given: {positional} and --profile {option}", field="PROFILE",
-                           hint=f"give one: s2r {command} PROFILE ...")
-    return str(positional if positional is not None else option)
+                           hint=f"give one: s2r {command} PROFILE ... or s2r {command} --profile PROFILE ...")
+    return False
+
+
+def _same_profile(a: str, b: str) -> bool:
+    """One profile: the same text, or two names or paths of one file."""
+    from s2r.errors import S2RError
+    from s2r.registry import resolve_profile
+
+    if a == b:
+        return True
+    try:
+        return os.path.samefile(resolve_profile(a), resolve_profile(b))
+    except (S2RError, OSError, ValueError):  # an unknown name, a missing file: not one profile
+        return False
+
+
+def _looks_like_profile(text: str) -> bool:
+    """A profile file's name (:data:`PROFILE_SUFFIXES`), or a known profile name that is no path here."""
+    if Path(text).suffix.lower() in PROFILE_SUFFIXES:
+        return True
+    if Path(text).exists() or "/" in text or os.sep in text:
+        return False
+    from s2r.registry import list_profiles
+
+    return text in list_profiles()
 
 
 def check_left_board(left: str, pattern: tuple[int, int]) -> None:

@@ -97,14 +97,6 @@ def _settings(args: argparse.Namespace) -> Any:
     return CheckSettings(tolerance_deg=(args.tolerance,) * 3, tolerance_px=args.tolerance_px)
 
 
-def _profile_and_folder(args: argparse.Namespace) -> None:
-    """``--profile P`` (as depth and sensor take it) or the PROFILE positional into ``args.profile``; with
-    ``--profile`` the first positional is the recording FOLDER."""
-    if args.profile_option is not None and args.profile is not None and args.recording is None:
-        args.profile, args.recording = None, Path(args.profile)
-    args.profile = profile_argument(args, command="check")
-
-
 def _refuse_reversed(args: argparse.Namespace) -> None:
     """``s2r check logs/run1 real.yaml``: a folder where the profile goes and a profile file where the recording
     goes is the arguments the wrong way round."""
@@ -125,7 +117,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.source import profile_sizes, read_pairs, skipped_fields
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
-    _profile_and_folder(args)
+    args.profile = profile_argument(args, command="check")  # with --profile, the positional may be the FOLDER
     if args.fix != (args.output is not None):
         raise CheckError("--fix and -o go together", field="--fix", hint="pass --fix -o corrected.yaml")
     _refuse_reversed(args)

@@ -144,6 +144,7 @@ def _cmd_depth(args: argparse.Namespace) -> int:
     if stream and args.rectified:
         raise DepthError("takes LEFT RIGHT or --left-dir/--right-dir, not a recording", field="--rectified",
                          hint="drop --rectified and give the recording's profile")
+    _refuse_one_camera_twice(args, stream=stream)
     if args.alpha is not None and not (0.0 <= args.alpha <= 1.0 or args.alpha == -1.0):  # NaN fails both
         raise DepthError(f"must be between 0 and 1, or -1 for OpenCV's default scaling, got {args.alpha}",
                          field="--alpha", hint="0 keeps only valid pixels, 1 keeps every source pixel")
@@ -163,6 +164,18 @@ def _cmd_depth(args: argparse.Namespace) -> int:
                          hint="give the pair as a recording (PROFILE FOLDER or --left/--right), or use --ply")
     args.ply = args.ply or args.points
     return _run_sequence(args, pipeline) if sequence else _run_pair(args, pipeline)
+
+
+def _refuse_one_camera_twice(args: argparse.Namespace, *, stream: bool) -> None:
+    """The same input for both cameras (LEFT RIGHT, --left-dir/--right-dir, any recording form), refused in one
+    message (:func:`s2r.recordings.refuse_same_sides`) before the profile is loaded or anything is decoded."""
+    from s2r.cli._recording import spec_from_args
+    from s2r.recordings import refuse_same_sides
+
+    refuse_same_sides(args.pair_left, args.pair_right, field="LEFT RIGHT", error=DepthError)
+    refuse_same_sides(args.left_dir, args.right_dir, field="--left-dir/--right-dir", error=DepthError)
+    if stream:
+        spec_from_args(args).check(error=DepthError)
 
 
 def _colour_range(text: str | None) -> tuple[float, float] | None:

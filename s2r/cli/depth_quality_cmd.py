@@ -14,12 +14,14 @@ from s2r.cli._common import (
     ProgressBar,
     add_force,
     add_json,
+    add_profile_positional,
     add_recording_inputs,
     argparse_type,
     check_left_board,
     load_profile,
     parse_pattern,
     print_json,
+    profile_argument,
 )
 from s2r.depth.names import PRESETS
 from s2r.errors import DepthError
@@ -47,7 +49,7 @@ def register(sub: Any) -> None:
         "from the device (--depth: uint16 mm PNG, 0 = no data, or float32 metres .npy, registered to the left "
         "image). --wall: a flat wall without a board (central ROI; refused when it is not a plane). Mismatched "
         "pixels are counted (outliers %) and left out of the RMS figures; a frame that cannot be scored says why.")
-    parser.add_argument("profile", metavar="PROFILE", help="profile name or YAML path")
+    add_profile_positional(parser, help="profile name or YAML path (or give it as --profile)")
     add_recording_inputs(parser)
     parser.add_argument("--preset", default="profile", choices=PRESETS, help="matcher preset for stereo pairs")
     parser.add_argument("--num-disparities", type=int, help="disparity range in px for stereo (multiple of 16)")
@@ -141,9 +143,10 @@ def _measure(args: argparse.Namespace, profile: StereoProfile, source: Recording
 def _cmd_depth_quality(args: argparse.Namespace) -> int:
     from s2r.quality.report import quality_lines, write_quality_report
 
+    name = profile_argument(args, command="depth-quality")  # first: with --profile the positional may be the FOLDER
     _check_args(args)
     source = _source(args)
-    profile = load_profile(args.profile)
+    profile = load_profile(name)
     if args.report:
         prepare_output_dir(args.report, force=args.force)
         check_output_free(Path(args.report) / "depth_quality.html", force=args.force)

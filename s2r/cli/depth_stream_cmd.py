@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from s2r.cli._common import ProgressBar, print_json
+from s2r.cli._common import ProgressBar, positional_is_profile, print_json
 from s2r.errors import DepthError
 
 if TYPE_CHECKING:
@@ -50,6 +50,8 @@ def split_inputs(args: argparse.Namespace) -> None:
     """Read the positionals: ``PROFILE [LEFT RIGHT | FOLDER]``; with ``--profile`` or ``--rectified`` they are only
     the inputs, and two image files alone are ``LEFT RIGHT`` with ``$S2R_PROFILE`` (the older order)."""
     items = [str(v) for v in args.inputs]
+    if args.profile is not None and items and positional_is_profile(items[0], args.profile, command="depth"):
+        items.pop(0)  # the same profile twice; another one is refused, never read as an image or a recording
     older = len(items) == 2 and all(_is_image(v) for v in items)
     if args.profile is None and not args.rectified and items and not older:
         args.profile = items.pop(0)

@@ -168,8 +168,9 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from s2r.sensor.files import dump_sensor_model
     from s2r.sensor.fit import fit_model
 
+    name = profile_argument(args, command="sensor fit")  # first: with --profile the positional may be the FOLDER
     _check_fit_args(args)
-    profile = load_profile(profile_argument(args, command="sensor fit"))
+    profile = load_profile(name)
     if args.left is not None:  # a wrong --pattern named in a second, before every frame's search
         check_left_board(args.left, args.pattern)
     check_output_free(args.out, force=args.force)
@@ -225,7 +226,7 @@ def _cmd_apply(args: argparse.Namespace) -> int:
         raise DepthError(f"must be 0 or more, got {args.seed}", field="--seed", hint="e.g. 0")
     if not 0 < args.depth_scale < float("inf"):
         raise DepthError(f"must be positive, got {args.depth_scale}", field="--depth-scale", hint="0.001 for mm")
-    profile = load_profile(profile_argument(args, command="sensor apply"))
+    profile = load_profile(profile_argument(args, command="sensor apply", shift_to=None))
     model = load_sensor_model(args.model)
     sources = list_files(args.depth, DEPTH_SUFFIXES, option="DEPTH")
     check_depth_sizes(sources, size=(profile.left.width_px, profile.left.height_px))  # before any is decoded

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from s2r.depth.pipeline import StereoPipeline
 
 __all__ = ["STAMP_SYNTHESIZED", "SYNTHETIC_PERIOD_NS", "SYNTHETIC_START_NS", "DepthFrame", "depth_frames", "frame_ids",
-           "rectified_frame_id"]
+           "is_rectified_frame_id", "rectified_frame_id"]
 
 log = logging.getLogger(__name__)
 
@@ -92,11 +92,29 @@ def rectified_frame_id(optical: str) -> str:
     """The frame of the rectified left camera beside the optical frame ``optical``, named after REP 103's
     ``_optical`` suffix: ``cam_optical_frame`` -> ``cam_rect_optical_frame``, ``cam_optical`` ->
     ``cam_rect_optical``, any other ``cam`` -> ``cam_rect``. Its axes are the optical frame's turned by the
-    rectification's R1 (``X_rect = R1 X_optical``), the same origin."""
+    rectification's R1 (``X_rect = R1 X_optical``), the same origin.
+
+    A frame already named rectified (:func:`is_rectified_frame_id`: ``cam_rect_optical_frame``, what s2r labels its
+    own outputs with) is returned as it is, never ``cam_rect_rect_optical_frame``: such input is rectified already,
+    so its profile is the rectified cameras' (R1 = I) and the data stay in that frame (the writers then publish no
+    transform of the frame into itself, and warn when R1 does turn). Only frame ids carry the suffix: output topics
+    are fixed names under ``--namespace`` (``left/image_rect``, never made from the input's topics) and output files
+    are named after the input frames as they are."""
+    if is_rectified_frame_id(optical):
+        return optical
     for suffix in ("_optical_frame", "_optical"):
         if optical.endswith(suffix):
             return optical[: -len(suffix)] + "_rect" + suffix
     return optical + "_rect"
+
+
+def is_rectified_frame_id(frame_id: str) -> bool:
+    """Whether ``frame_id`` names a rectified frame: ``_rect`` last, or before REP 103's ``_optical_frame`` /
+    ``_optical`` suffix (``cam_rect``, ``cam_rect_optical``, ``cam_rect_optical_frame``)."""
+    for suffix in ("_optical_frame", "_optical"):
+        if frame_id.endswith(suffix):
+            return frame_id[: -len(suffix)].endswith("_rect")
+    return frame_id.endswith("_rect")
 
 
 def _stamp(frame: StereoFrame, previous: int | None) -> tuple[int, str]:

@@ -31,7 +31,7 @@ from s2r.errors import DepthError
 from s2r.profile import StereoProfile
 from s2r.quality.inputs import DEFAULT_DEPTH_SCALE_M
 from s2r.quality.run import DepthView
-from s2r.recordings import RecordingSpec, open_recording
+from s2r.recordings import RecordingSpec, open_recording, refuse_same_sides
 
 __all__ = ["OpenedSource", "RecordingSource", "check_source", "open_source", "parse_source", "stereo_spec"]
 
@@ -145,6 +145,10 @@ def check_source(source: RecordingSource, *, option: str, need_left: bool = True
         raise DepthError("a bag needs left-topic", field=option, hint="e.g. left-topic=/camera/infra1/image_rect_raw")
     if source.bag is None and source.left is None and (need_left or stereo):
         raise DepthError("missing left images", field=option, hint="add left=DIR|GLOB")
+    if stereo:
+        refuse_same_sides(source.left_topic, source.right_topic, field=option, topics=True, path=source.bag,
+                          error=DepthError)
+        refuse_same_sides(source.left, source.right, field=option, error=DepthError)
     return source
 
 

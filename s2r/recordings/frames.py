@@ -1,15 +1,24 @@
-"""The frame contract every recording input yields and every stream consumer (depth, calibrate, check) reads."""
+"""The frame contract every recording input yields and every stream consumer (depth, calibrate, check) reads, and
+the one refusal of an input given for both cameras."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
-from typing import Protocol, TypeVar
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["STAMP_FILE_TIME", "STAMP_RECORDED", "FrameSource", "StereoFrame", "skipped_inputs", "thinned"]
+from s2r.errors import RecordingError
+
+if TYPE_CHECKING:
+    from s2r.errors import S2RError
+
+__all__ = ["STAMP_FILE_TIME", "STAMP_RECORDED", "FrameSource", "StereoFrame", "refuse_same_sides", "skipped_inputs",
+           "thinned"]
 
 T = TypeVar("T")
 
@@ -85,3 +94,37 @@ def thinned(items: Iterable[T], every: int = 1, max_frames: int | None = None) -
         kept += 1
         if max_frames is not None and kept >= max_frames:
             return
+
+
+def refuse_same_sides(left: str | Path | None, right: str | Path | None, *, field: str, topics: bool = False,
+                      path: str | Path | None = None, error: type[S2RError] = RecordingError) -> None:
+    """The one refusal of the same input given for the left and the right camera (two topics, files, folders or
+    globs), for every command and input form, before anything is decoded.
+
+    Args:
+        left, right: the two inputs as given (None: not given, nothing to compare).
+        field: the options (or positionals) named in the error, e.g. ``--left-topic/--right-topic``.
+        topics: ``left`` and ``right`` are topic names (compared as given); else paths or globs, the same when
+            they name one path (after ``.``/``..`` and symbolic links) or are one glob.
+        path: the file holding both (a bag), named in the error.
+
+    Raises:
+        ``error``: ``left and right are the same <topic|glob|folder|file> X (give the two cameras' inputs)``.
+    """
+    if left is None or right is None or not (left == right if topics else _same_path(str(left), str(right))):
+        return
+    kind = "topic" if topics else "glob" if any(ch in str(left) for ch in "*?[") else \
+        "folder" if Path(left).is_dir() else "file"
+    raise error(f"left and right are the same {kind} {left}", path=path, field=field,
+                hint="give the two cameras' inputs")
+
+
+def _same_path(left: str, right: str) -> bool:
+    """Whether two paths (or globs) name one file or folder: equal once made absolute and normalised, or one file
+    on disk (a link, ``..``)."""
+    if os.path.normpath(os.path.abspath(left)) == os.path.normpath(os.path.abspath(right)):
+        return True
+    try:
+        return os.path.samefile(left, right)
+    except (OSError, ValueError):  # not there (a glob, a missing file): only the names compare
+        return False

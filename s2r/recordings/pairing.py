@@ -23,6 +23,7 @@ from pathlib import Path
 
 from s2r.errors import CalibrationError
 from s2r.fileio import protect_read_files
+from s2r.recordings.frames import refuse_same_sides
 
 __all__ = ["IMAGE_SUFFIXES", "PairSet", "find_mono_images", "find_stereo_pairs", "pair_by_number"]
 
@@ -188,6 +189,8 @@ def _find_stereo_pairs(folder: Path | None, *, left_glob: str | None, right_glob
                                path=folder, hint="pass a folder with left/ and right/ or left*/right* images")
     subfolders = _camera_subfolders(folder) or _one_camera_subfolder(folder)
     if subfolders is not None:
+        refuse_same_sides(  # left/ a link to right/: one camera's images twice
+            subfolders[0], subfolders[1], field="FOLDER", error=CalibrationError)
         return pair_by_number(_images_in(subfolders[0]), _images_in(subfolders[1]))
     left, right = _images_in(folder, "left"), _images_in(folder, "right")
     if not left and not right:

@@ -25,9 +25,9 @@ from pathlib import Path
 
 from s2r.errors import RecordingError, S2RError
 from s2r.recordings.decode import ExpectedSize, SizeRule
-from s2r.recordings.frames import FrameSource
+from s2r.recordings.frames import FrameSource, refuse_same_sides
 
-__all__ = ["RecordingSpec", "open_recording"]
+__all__ = ["RecordingSpec", "open_recording", "refuse_same_sides"]
 
 _FORMS = "a FOLDER, --left/--right globs, --bag, --video or --left-video/--right-video"
 
@@ -90,7 +90,19 @@ class RecordingSpec:
                         hint="e.g. --start-stamp 2024-05-01T12:00:00Z or 1714564800.0")
         if not 0 < self.max_dt_s < float("inf"):
             raise error(f"must be positive seconds, got {self.max_dt_s}", field="--max-dt", hint="e.g. 0.01")
+        self._check_two_sides(given[0], error)
         return self
+
+    def _check_two_sides(self, kind: str, error: type[S2RError]) -> None:
+        """Refuse one input given for both cameras (:func:`~s2r.recordings.frames.refuse_same_sides`), before
+        anything is opened."""
+        if kind == "bag":
+            refuse_same_sides(self.left_topic, self.right_topic, field="--left-topic/--right-topic", topics=True,
+                              path=self.bag, error=error)
+        elif kind == "globs":
+            refuse_same_sides(self.left_glob, self.right_glob, field="--left/--right", error=error)
+        elif kind == "videos":
+            refuse_same_sides(self.left_video, self.right_video, field="--left-video/--right-video", error=error)
 
     def describe(self) -> str:
         """The recording in one phrase."""

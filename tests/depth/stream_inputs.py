@@ -91,8 +91,9 @@ def write_folder(frames: list[KnownFrame], folder: Path) -> list[str]:
     return names
 
 
-def write_ros2_bag(frames: list[KnownFrame], path: Path) -> None:
-    """The frames as mono8 Images on two topics of a ROS 2 (sqlite3) bag, written by rosbags."""
+def write_ros2_bag(frames: list[KnownFrame], path: Path, *, frame_id: str = "input_cam") -> None:
+    """The frames as mono8 Images on two topics of a ROS 2 (sqlite3) bag, written by rosbags, labelled
+    ``frame_id``."""
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -104,7 +105,7 @@ def write_ros2_bag(frames: list[KnownFrame], path: Path) -> None:
                                                                                                  RIGHT_TOPIC)}
         for frame, stamp in zip(frames, STAMPS_NS, strict=False):
             for topic, img in ((LEFT_TOPIC, frame.left), (RIGHT_TOPIC, frame.right)):
-                hdr = header(stamp=time(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id="input_cam")
+                hdr = header(stamp=time(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id=frame_id)
                 msg = image(header=hdr, height=img.shape[0], width=img.shape[1], encoding="mono8", is_bigendian=0,
                             step=img.shape[1], data=np.ascontiguousarray(img).reshape(-1))
                 writer.write(conns[topic], stamp, store.serialize_cdr(msg, "sensor_msgs/msg/Image"))

@@ -105,9 +105,10 @@ def test_bad_images(setup: tuple[Path, Path, Path], tmp_path: Path, capsys: pyte
     text.write_text("hello")
     assert main(["depth", "--profile", str(profile), str(text), str(right), "-o", out]) == 2
     assert "left.txt: cannot read image" in capsys.readouterr().err
-    big = tmp_path / "big.png"
+    big, big_right = tmp_path / "big.png", tmp_path / "big_right.png"
     cv2.imwrite(str(big), np.zeros((480, 640), np.uint8))
-    assert main(["depth", "--profile", str(profile), str(big), str(big), "-o", out]) == 2
+    cv2.imwrite(str(big_right), np.zeros((480, 640), np.uint8))
+    assert main(["depth", "--profile", str(profile), str(big), str(big_right), "-o", out]) == 2
     assert "images are 640x480 but profile small_rig is 320x240" in capsys.readouterr().err
     assert main(["depth", "--profile", str(profile), str(left), "-o", out]) == 2
     assert "one image given; a pair needs LEFT and RIGHT" in capsys.readouterr().err

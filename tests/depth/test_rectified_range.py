@@ -34,9 +34,10 @@ def test_rectified_cones_match_the_known_disparity(tmp_path: Path) -> None:
 
 
 def test_rectified_needs_its_geometry_and_no_profile(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    image = tmp_path / "a.png"
-    cv2.imwrite(str(image), np.zeros((20, 30), np.uint8))
-    base = ["depth", str(image), str(image), "-o", str(tmp_path / "o"), "--rectified"]
+    image, right = tmp_path / "a.png", tmp_path / "b.png"
+    for path in (image, right):
+        cv2.imwrite(str(path), np.zeros((20, 30), np.uint8))
+    base = ["depth", str(image), str(right), "-o", str(tmp_path / "o"), "--rectified"]
     assert main([*base, "--f", "100"]) == 2
     assert "--rectified: needs --baseline, --cx, --cy" in capsys.readouterr().err
     assert main([*base, *GEOMETRY, "--profile", "realsense_d435_848x480"]) == 2
@@ -47,9 +48,10 @@ def test_rectified_needs_its_geometry_and_no_profile(capsys: pytest.CaptureFixtu
 
 @pytest.mark.parametrize("text", ["5,1", "a,b", "0,2", "1", "nan,2", "1,inf"])
 def test_a_bad_range_is_one_line(capsys: pytest.CaptureFixture[str], tmp_path: Path, text: str) -> None:
-    image = tmp_path / "a.png"
-    cv2.imwrite(str(image), np.zeros((20, 30), np.uint8))
-    assert main(["depth", str(image), str(image), "-o", str(tmp_path / "o"), "--rectified", *GEOMETRY,
+    image, right = tmp_path / "a.png", tmp_path / "b.png"
+    for path in (image, right):
+        cv2.imwrite(str(path), np.zeros((20, 30), np.uint8))
+    assert main(["depth", str(image), str(right), "-o", str(tmp_path / "o"), "--rectified", *GEOMETRY,
                  "--range", text]) == 2
     assert capsys.readouterr().err.strip().startswith("error: --range:")
 

@@ -83,11 +83,12 @@ def test_depth_output_that_is_a_file(tmp_path: Path, capsys: pytest.CaptureFixtu
     import cv2
     import numpy as np
 
-    image = tmp_path / "img.png"
-    cv2.imwrite(str(image), np.zeros((480, 848), np.uint8))
+    image, right = tmp_path / "img.png", tmp_path / "right.png"
+    for path in (image, right):
+        cv2.imwrite(str(path), np.zeros((480, 848), np.uint8))
     out = tmp_path / "existing.txt"
     out.write_text("keep", encoding="utf-8")
-    code = main(["depth", str(image), str(image), "--profile", str(PROFILE), "-o", str(out)])
+    code = main(["depth", str(image), str(right), "--profile", str(PROFILE), "-o", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "is a file, expected a folder" in err and "File exists" not in err
     assert out.read_text(encoding="utf-8") == "keep"

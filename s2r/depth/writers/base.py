@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import abc
+import logging
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from s2r.errors import DepthError
 from s2r.progress import ProgressCallback, report
@@ -17,6 +21,11 @@ if TYPE_CHECKING:
     from s2r.rectification import StereoRectification
 
 __all__ = ["TARGETS", "StreamOptions", "StreamWriter", "open_writer", "write_stream"]
+
+log = logging.getLogger(__name__)
+
+#: A rectification turning the left camera by more than this (degrees) is not the identity of rectified input.
+RECTIFIED_TURN_DEG = 0.01
 
 #: Output targets of ``s2r depth --to``.
 TARGETS: tuple[str, ...] = ("files", "ros2", "ros1")
@@ -54,6 +63,7 @@ class StreamWriter(abc.ABC):
         self.options = options
         self.frames = 0
         self._rects: dict[tuple[int, int], StereoRectification] = {}
+        self._warned_rectified = False
 
     def __enter__(self) -> StreamWriter:
         return self
@@ -67,6 +77,21 @@ class StreamWriter(abc.ABC):
         if (w, h) not in self._rects:
             self._rects[(w, h)] = self.pipeline.geometry_for((w, h)).rectification
         return self._rects[(w, h)]
+
+    def rect_frame_id(self, frame: DepthFrame) -> str:
+        """The frame the outputs of ``frame`` are labelled with (:func:`s2r.depth.stream.rectified_frame_id`); warns
+        once when the input's frame is rectified already yet this profile's rectification turns it (R1 not I)."""
+        from s2r.depth.stream import is_rectified_frame_id, rectified_frame_id
+
+        if is_rectified_frame_id(frame.frame_id) and not self._warned_rectified:
+            R1 = np.asarray(self.rectification(frame).R1, np.float64)
+            turn_deg = math.degrees(math.acos(max(-1.0, min(1.0, (float(np.trace(R1)) - 1.0) / 2.0))))
+            if turn_deg > RECTIFIED_TURN_DEG:
+                log.warning("%s: the input's frame %s is rectified already, yet profile %s rectifies it again (a "
+                            "%.3f deg turn): its depth is labelled %s; give the profile of the rectified cameras",
+                            frame.source, frame.frame_id, self.pipeline.profile.name, turn_deg, frame.frame_id)
+            self._warned_rectified = True
+        return rectified_frame_id(frame.frame_id)
 
     @abc.abstractmethod
     def write(self, frame: DepthFrame) -> None:

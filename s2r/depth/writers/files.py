@@ -33,7 +33,7 @@ from s2r.depth.outputs import (
     rectified_camera_info,
 )
 from s2r.depth.pipeline import StereoPipeline
-from s2r.depth.stream import DepthFrame, rectified_frame_id
+from s2r.depth.stream import DepthFrame
 from s2r.depth.writers.base import StreamOptions, StreamWriter
 from s2r.errors import DepthError
 from s2r.fileio import OutputBatch, npy_bytes, prepare_output_dir
@@ -73,7 +73,7 @@ class FilesWriter(StreamWriter):
         row: dict[str, object] = {
             "index": frame.index, "name": name, "stamp_ns": frame.stamp_ns,
             "stamp_source": frame.stamp_source,
-            "frame_id": rectified_frame_id(frame.frame_id),
+            "frame_id": self.rect_frame_id(frame),
             "source": frame.source, "valid_fraction": f"{float(r.valid.mean()):.6f}",
             "depth_png": self._add(f"depth/{name}.png", png_bytes(depth_to_mm(r.depth), depth_png)),
             "depth_npy": self._add(f"depth/{name}.npy", npy_bytes(np.asarray(r.depth, np.float32))),

@@ -133,11 +133,15 @@ class RosMessages:
     def tf_static(self, stamp_ns: int, profile: StereoProfile, left_frame: str, right_frame: str, *,
                   rect_frame: str, R1: NDArray[np.float64]) -> Any:
         """TFMessage: the right optical frame in the left one (``X_left = R^T X_right - R^T T``) and the rectified
-        left frame in the left optical one (``X_left = R1^T X_rect``: the rectification turns, never moves)."""
+        left frame in the left optical one (``X_left = R1^T X_rect``: the rectification turns, never moves); no
+        rectified frame when it is the left frame itself (input rectified already, its name kept: a transform of a
+        frame into itself is a loop in tf)."""
         R, T = np.asarray(profile.R, np.float64), np.asarray(profile.T, np.float64).reshape(3)
-        right = self._transform(stamp_ns, left_frame, right_frame, R.T, -R.T @ T)
-        rect = self._transform(stamp_ns, left_frame, rect_frame, np.asarray(R1, np.float64).T, np.zeros(3))
-        return self._t("tf2_msgs/msg/TFMessage")(transforms=[right, rect])
+        transforms = [self._transform(stamp_ns, left_frame, right_frame, R.T, -R.T @ T)]
+        if rect_frame != left_frame:
+            transforms.append(self._transform(stamp_ns, left_frame, rect_frame, np.asarray(R1, np.float64).T,
+                                              np.zeros(3)))
+        return self._t("tf2_msgs/msg/TFMessage")(transforms=transforms)
 
     def serialize(self, message: Any) -> bytes:
         kind = message.__msgtype__

@@ -17,7 +17,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Final
 
-from s2r.depth.stream import DepthFrame, frame_ids, rectified_frame_id
+from s2r.depth.stream import DepthFrame, frame_ids
 from s2r.depth.writers.base import StreamWriter
 from s2r.depth.writers.ros_messages import DEPTH_ENCODINGS, RosMessages
 from s2r.errors import DepthError, S2RError
@@ -125,7 +125,7 @@ class RosBagWriter(StreamWriter):
                            hint="free some space or choose a writable location") from None
 
     def write(self, frame: DepthFrame) -> None:
-        rect_frame = rectified_frame_id(frame.frame_id)
+        rect_frame = self.rect_frame_id(frame)
         if self._writer is None:
             self._open(frame)
             left, right = frame_ids(frame.frame_id, self.pipeline.profile.right.frame_id, "", "")
