@@ -23,7 +23,10 @@ The fold solves run in parallel in s2r's process pool (:func:`s2r.cvpool.opencv_
 
 from __future__ import annotations
 
+import contextlib
+import logging
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
@@ -37,10 +40,13 @@ from s2r.calib.solve.solvers.jointterms import State as SolveState
 from s2r.calib.solve.solvers.observations import StereoObservation
 from s2r.cvpool import opencv_pool
 from s2r.errors import CalibrationError
+from s2r.executor import WorkersUnavailable
 from s2r.lens.models import LensModel
 
 __all__ = ["BLUNDER_FLOOR_PX", "BLUNDER_SIGMAS", "FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std",
            "run_fold", "run_folds", "split_folds", "trim_blunders"]
+
+log = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
 T = TypeVar("T")
@@ -207,17 +213,29 @@ def run_fold(task: FoldTask) -> FoldOutcome:
                        warp=sol.warp if task.warp else None)
 
 
+def _fold_pool(jobs: int, stack: contextlib.ExitStack) -> ProcessPoolExecutor | None:
+    """The folds' pool, or None to solve them in this process (one job, or no way to start workers here)."""
+    if jobs <= 1:
+        return None
+    try:
+        return stack.enter_context(opencv_pool(jobs))
+    except WorkersUnavailable as exc:
+        log.warning("%s: solving the folds in one process", exc.message)
+        return None
+
+
 def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | None = None,
               then: Callable[[T], Sequence[FoldTask]] | None = None
               ) -> tuple[list[FoldOutcome], T | None, list[FoldOutcome]]:
     """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1); the result of
     ``side`` (a picklable call, submitted first so it runs beside the folds); and the outcomes of the tasks
     ``then`` makes of that result (submitted as soon as it is known, e.g. only when it is worth testing)."""
-    if jobs <= 1 or len(tasks) <= 1:
-        extra = None if side is None else side()
-        more = [] if extra is None or then is None else then(extra)
-        return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
-    with opencv_pool(min(jobs, len(tasks))) as pool:
+    with contextlib.ExitStack() as stack:
+        pool = _fold_pool(min(jobs, len(tasks)), stack)
+        if pool is None:
+            extra = None if side is None else side()
+            more = [] if extra is None or then is None else then(extra)
+            return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
         side_future = None if side is None else pool.submit(side)
         futures = [pool.submit(run_fold, t) for t in tasks]
         extra = None if side_future is None else side_future.result()
