@@ -58,7 +58,7 @@ def test_ctrl_c_while_workers_start_is_the_parents_and_no_worker_prints_a_traceb
     assert "Traceback" not in out.stderr and "KeyboardInterrupt" not in out.stderr, out.stderr
 
 
-def test_workers_ignore_ctrl_c_and_the_pool_still_works() -> None:
+def test_a_ctrl_c_reaching_starting_workers_alone_is_dropped_and_the_pool_works() -> None:
     code = _SIGNAL_AT_START.replace("after_in_parent=lambda: os.kill(os.getpid(), signal.SIGINT)",
                                     "after_in_parent=lambda: None")
     out = _python(code)

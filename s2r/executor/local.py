@@ -2,8 +2,8 @@
 
 - :func:`local_pool`: a ``concurrent.futures.ProcessPoolExecutor`` whose workers start by ``fork`` where it exists
   (instant, cv2 already loaded, the caller's ``__main__`` never re-imported), all before it is returned, with
-  SIGINT and SIGTERM blocked meanwhile; they die with their parent, even when it is killed with ``kill -9``, and
-  leave Ctrl-C to it. :func:`s2r.cvpool.opencv_pool` wraps it for OpenCV work.
+  SIGINT and SIGTERM blocked meanwhile (a signal then is the parent's alone); they die with their parent, even
+  when it is killed with ``kill -9``. :func:`s2r.cvpool.opencv_pool` wraps it for OpenCV work.
 - :func:`usable_cores`: the default worker count (the affinity mask and a cgroup CPU quota, not the host's cores).
 - Programs s2r starts (a spawned Dask worker, the MuJoCo probe) get :func:`child_environment`: ``import cv2``
   leaves LD_LIBRARY_PATH ending in an empty entry, which the dynamic loader reads as the current folder.
@@ -56,14 +56,18 @@ def _die_with_parent(parent_pid: int) -> None:
 
     On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
     thread also watches the parent pid once a second and exits when the worker was re-parented. The worker was
-    forked with SIGINT and SIGTERM blocked (:func:`local_pool`): it ignores SIGINT (a Ctrl-C reaches the whole
-    process group; the parent cancels the work and shuts the pool down) and dies quietly on SIGTERM, and only
-    then unblocks them, so a signal arriving while it starts never raises inside multiprocessing's start-up.
+    forked with SIGINT and SIGTERM blocked (:func:`local_pool`): a Ctrl-C that reached the process group while it
+    started is discarded here (ignored while unblocked: it is the parent's to act on), so it never raises inside
+    multiprocessing's start-up; then the inherited handlers are back, and a later Ctrl-C ends a running task at
+    once, as before.
     """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    handlers = {sig: signal.getsignal(sig) for sig in _START_SIGNALS}
+    for sig in _START_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _START_SIGNALS)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _START_SIGNALS)  # pending ones are dropped while ignored
+    for sig, handler in handlers.items():
+        signal.signal(sig, handler)
     if sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
