@@ -14,11 +14,10 @@ from concurrent.futures import Future, ProcessPoolExecutor
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.cvpool import opencv_pool
+from s2r.cvpool import opencv_pool_or_none
 from s2r.drift.matches import MAX_FEATURE_PIXELS, FrameMatches, match_frame
 from s2r.drift.turned import Turn, side_by_side_turn
 from s2r.errors import CheckError
-from s2r.executor import WorkersUnavailable
 from s2r.profile import StereoProfile
 from s2r.progress import ProgressCallback, report
 from s2r.rectification import StereoRectification, stereo_rectification
@@ -77,11 +76,7 @@ def _matching_pool(profile: StereoProfile, jobs: int, stack: contextlib.ExitStac
     queued to them, 8192^2 pairs would break the 1 GB the single process keeps to), or no way to start workers."""
     if jobs <= 1 or profile.left.width_px * profile.left.height_px > MAX_FEATURE_PIXELS:
         return None
-    try:
-        return stack.enter_context(opencv_pool(jobs))
-    except WorkersUnavailable as exc:
-        log.warning("%s: matching in one process", exc.message)
-        return None
+    return opencv_pool_or_none(jobs, stack, "matching")
 
 
 def match_pairs(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,

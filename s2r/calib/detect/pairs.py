@@ -19,9 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.calib.detect.stream import CornerCache, Detection, DetectItem, detect_stream
-from s2r.cvpool import opencv_pool
+from s2r.cvpool import opencv_pool_or_none
 from s2r.errors import CalibrationError
-from s2r.executor import WorkersUnavailable, usable_cores
+from s2r.executor import usable_cores
 from s2r.fileio import sha256_file
 from s2r.progress import ProgressCallback
 
@@ -81,11 +81,8 @@ class PairDetection:
         cache = CornerCache(cache_dir) if cache_dir is not None else None
         pool = None
         if jobs > 1 and self.left:
-            try:  # the workers fork now, from this thread (see the module doc)
-                pool = self._workers.enter_context(opencv_pool(jobs))
-            except WorkersUnavailable as exc:
-                log.warning("%s: detecting in one process", exc.message)
-                jobs = 1
+            pool = opencv_pool_or_none(jobs, self._workers, "detecting")  # forks now, from this thread (module doc)
+            jobs = jobs if pool is not None else 1
         self._thread = threading.Thread(target=self._run, args=(jobs, cache, progress, pool),
                                         name="s2r-detection", daemon=True)
         self._thread.start()

@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import logging
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
@@ -38,9 +37,8 @@ from s2r.calib.solve.solvers.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, Joint
 from s2r.calib.solve.solvers.jointterms import Masks, all_residuals, normal_equations, prepare
 from s2r.calib.solve.solvers.jointterms import State as SolveState
 from s2r.calib.solve.solvers.observations import StereoObservation
-from s2r.cvpool import opencv_pool
+from s2r.cvpool import opencv_pool_or_none
 from s2r.errors import CalibrationError
-from s2r.executor import WorkersUnavailable
 from s2r.lens.models import LensModel
 
 __all__ = ["BLUNDER_FLOOR_PX", "BLUNDER_SIGMAS", "FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std",
@@ -213,17 +211,6 @@ def run_fold(task: FoldTask) -> FoldOutcome:
                        warp=sol.warp if task.warp else None)
 
 
-def _fold_pool(jobs: int, stack: contextlib.ExitStack) -> ProcessPoolExecutor | None:
-    """The folds' pool, or None to solve them in this process (one job, or no way to start workers here)."""
-    if jobs <= 1:
-        return None
-    try:
-        return stack.enter_context(opencv_pool(jobs))
-    except WorkersUnavailable as exc:
-        log.warning("%s: solving the folds in one process", exc.message)
-        return None
-
-
 def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | None = None,
               then: Callable[[T], Sequence[FoldTask]] | None = None
               ) -> tuple[list[FoldOutcome], T | None, list[FoldOutcome]]:
@@ -231,7 +218,7 @@ def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | N
     ``side`` (a picklable call, submitted first so it runs beside the folds); and the outcomes of the tasks
     ``then`` makes of that result (submitted as soon as it is known, e.g. only when it is worth testing)."""
     with contextlib.ExitStack() as stack:
-        pool = _fold_pool(min(jobs, len(tasks)), stack)
+        pool = opencv_pool_or_none(min(jobs, len(tasks)), stack, "solving the folds")
         if pool is None:
             extra = None if side is None else side()
             more = [] if extra is None or then is None else then(extra)
