@@ -9,15 +9,18 @@ its own setting when the pool is shut down.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 
 import cv2
 
-from s2r.executor import local_pool
+from s2r.executor import WorkersUnavailable, local_pool
 
-__all__ = ["opencv_pool"]
+__all__ = ["opencv_pool", "opencv_pool_or_none"]
+
+log = logging.getLogger(__name__)
 
 
 @contextmanager
@@ -32,3 +35,15 @@ def opencv_pool(jobs: int) -> Iterator[ProcessPoolExecutor]:
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         cv2.setNumThreads(threads)
+
+
+def opencv_pool_or_none(jobs: int, stack: ExitStack, what: str) -> ProcessPoolExecutor | None:
+    """:func:`opencv_pool` entered on ``stack``, or None when ``jobs`` is 1 or worker processes cannot start here
+    (no writable ``/dev/shm``: a warning then says that ``what``, e.g. "matching", runs in one process)."""
+    if jobs <= 1:
+        return None
+    try:
+        return stack.enter_context(opencv_pool(jobs))
+    except WorkersUnavailable as exc:
+        log.warning("%s: %s in one process", exc.message, what)
+        return None

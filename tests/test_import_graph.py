@@ -36,6 +36,7 @@ CV2_HOMES = {"lens", "cvpool", "calib", "depth", "render", "rectification", "ima
 #: where it belongs. calib's stages are tests/calib/test_layout.py's.
 INNER: dict[str, list[set[str]]] = {
     "fileio": [{"inputs", "reading"}, {"outputs"}, {"atomic"}],
+    "executor": [{"local"}, {"runner"}],
     "profile": [{"base"}, {"camera", "settings"}, {"rig"}],
     "lens": [{"distortion", "fold", "models"}],
     "sensor": [{"model", "depth_files"}, {"depth", "files", "images"}, {"fit"}],

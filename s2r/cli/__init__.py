@@ -275,6 +275,10 @@ def _report(exc: Exception) -> int:
             where = ".".join(str(p) for p in first["loc"]) or exc.title
             print(terminal_safe(f"error: {where}: {' '.join(str(first['msg']).split())}"), file=sys.stderr)
             return EXIT_BAD_INPUT
+        if type(exc).__name__ == "BrokenProcessPool":  # concurrent.futures' (loaded only where pools run)
+            print("error: a worker process ended abruptly (killed by another program or the out-of-memory killer); "
+                  "nothing was written (run again, or with --jobs 1 to use one process)", file=sys.stderr)
+            return EXIT_BAD_INPUT
         if isinstance(exc, OSError) and exc.filename is not None:  # a file the user named is unusable
             print(f"error: {terminal_safe(exc.filename)}: {terminal_safe(exc.strerror or exc)}", file=sys.stderr)
             return EXIT_BAD_INPUT

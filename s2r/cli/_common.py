@@ -200,11 +200,22 @@ def add_jobs(parser: Any, *, default: int | None, help: str) -> None:
     parser.add_argument("--workers", type=int, dest="jobs", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
-def check_jobs(jobs: int | None, error: Callable[..., Exception]) -> None:
-    """Refuse ``--jobs`` below 1 (None is a command's default) with ``error`` (the command's S2RError type): one
-    message for every command."""
+#: Local worker processes per usable core ``--jobs`` may ask for: each holds images, so more is memory, not speed.
+MAX_JOBS_PER_CORE = 4
+
+
+def check_jobs(jobs: int | None, error: Callable[..., Exception], *, local: bool = True) -> None:
+    """Refuse ``--jobs`` below 1 (None is a command's default), or over :data:`MAX_JOBS_PER_CORE` times the cores
+    this process may use when the workers are ``local`` processes, with ``error`` (the command's S2RError type):
+    one message for every command."""
+    from s2r.executor import usable_cores
+
     if jobs is not None and jobs < 1:
         raise error(f"must be at least 1, got {jobs}", field="--jobs/--workers", hint="e.g. --jobs 2")
+    cores = usable_cores()
+    if jobs is not None and local and jobs > MAX_JOBS_PER_CORE * cores:
+        raise error(f"{jobs} local worker processes on {cores} usable cores", field="--jobs/--workers",
+                    hint=f"at most {MAX_JOBS_PER_CORE * cores} here; each holds images, so more only costs memory")
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:

@@ -9,7 +9,6 @@ import argparse
 import contextlib
 import json
 import math
-import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -115,6 +114,7 @@ def _source(args: argparse.Namespace) -> Any:
 def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.check import run_check
     from s2r.drift.source import profile_sizes, read_pairs, skipped_fields
+    from s2r.executor import usable_cores
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
 
     args.profile = profile_argument(args, command="check")  # with --profile, the positional may be the FOLDER
@@ -132,7 +132,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     skipped: list[str] = []
     pairs = read_pairs(source, sizes=profile_sizes(profile), skipped=skipped)
     checked = run_check(profile, pairs, settings=settings, progress=bar, total=source.max_frames,
-                        jobs=min(args.jobs or os.cpu_count() or 1, source.max_frames))  # no idle workers
+                        jobs=min(args.jobs or usable_cores(), source.max_frames))
     result = checked.result
     steps = _next_steps(args, result)
     if args.json:
@@ -197,11 +197,7 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     from s2r.drift.fleet_store import check_history_folder
 
     settings = _settings(args)
-    check_jobs(args.jobs, CheckError)
-    cores = os.cpu_count() or 1
-    if args.scheduler is None and args.jobs > 4 * cores:  # each is a process holding images: not a queue
-        raise CheckError(f"{args.jobs} local worker processes on {cores} cores", field="--jobs/--workers",
-                         hint=f"at most {4 * cores} here; for more, run a Dask cluster and pass --scheduler")
+    check_jobs(args.jobs, CheckError, local=args.scheduler is None)  # more: a Dask cluster (--scheduler)
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
     history = check_history_folder(args.history) if args.history is not None else None
     journal = _fleet_output(args)

@@ -13,27 +13,28 @@ needed); every report says so.
 from __future__ import annotations
 
 import logging
-import os
-from collections import deque
-from collections.abc import Iterable, Iterator, Sequence
-from concurrent.futures import Future
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from s2r.cvpool import opencv_pool
 from s2r.drift.estimate import Estimate, MatchSet, estimate_rotation
-from s2r.drift.matches import FrameMatches, RawMatches, detection_scale, gate_matches, match_frame
+from s2r.drift.matches import (
+    FrameMatches,
+    RawMatches,
+    detection_scale,
+    gate_matches,
+)
+from s2r.drift.matching import check_image_sizes, match_pairs, working_profile
 from s2r.drift.model import predict_right, robust_scale
 from s2r.drift.swap import SwapFinding, find_swap
-from s2r.drift.turned import Turn, side_by_side_turn
+from s2r.drift.turned import Turn
 from s2r.drift.verdict import AXES, Verdict, judge
-from s2r.errors import CheckError
 from s2r.profile import StereoProfile
-from s2r.progress import ProgressCallback, report
-from s2r.rectification import StereoRectification, stereo_rectification
+from s2r.progress import ProgressCallback
+from s2r.rectification import StereoRectification
 
 __all__ = ["AXES", "BLIND_SPOTS", "CONVENTION", "CheckSettings", "Checked", "DriftResult", "check_drift",
            "check_image_sizes", "match_pairs", "summarise"]
@@ -168,15 +169,6 @@ def _seen_depth(profile: StereoProfile, rect: Any, centre: FloatArray, z: float,
     return rect.fx_px * rect.baseline_m / seen if seen > 0 else float("inf")
 
 
-def check_image_sizes(profile: StereoProfile, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8]) -> None:
-    """CheckError naming frame ``name`` when an image is not the size its camera has in ``profile``."""
-    for side, cam, image in (("left", profile.left, left), ("right", profile.right, right)):
-        if image.shape[:2] != (cam.height_px, cam.width_px):
-            raise CheckError(f"{side} image is {image.shape[1]}x{image.shape[0]} px but the profile "
-                             f"{profile.name!r} has {cam.width_px}x{cam.height_px}", path=name, field="image size",
-                             hint="check the recording with the profile of the camera that took it")
-
-
 def _cannot_tell(matches: int, frames: Sequence[FrameMatches], settings: CheckSettings) -> str:
     """Why too few matches: identical images, blur or no texture (one sentence)."""
     identical = [f.name for f in frames if f.identical]
@@ -200,32 +192,6 @@ class Checked:
     result: DriftResult
 
 
-def _working(profile: StereoProfile) -> tuple[StereoProfile, StereoRectification, Turn | None]:
-    """The profile the check works with (a vertical rig turned on its side), its rectification and the turn."""
-    rect = stereo_rectification(profile)
-    if abs(rect.P2[1, 3]) <= abs(rect.P2[0, 3]):
-        _check_baseline(profile, rect)
-        return profile, rect, None
-    turn = side_by_side_turn(profile)  # OpenCV rectified it top-bottom: check it turned side by side
-    turned = stereo_rectification(turn.profile)
-    _check_baseline(profile, turned)
-    return turn.profile, turned, turn
-
-
-def _check_baseline(profile: StereoProfile, rect: StereoRectification) -> None:
-    """CheckError (one line, exit 2) when the rectified rig has no usable baseline: a diagonal one (as far
-    across as up, which neither a side-by-side nor a vertical rectification holds) or a right camera on the
-    left of the profile's own left one."""
-    if np.isfinite(rect.baseline_m) and rect.baseline_m > 1e-9 * max(profile.baseline_m, 1e-12):
-        return
-    x, y, z = (float(v) for v in -profile.R.T @ profile.T.reshape(3))
-    raise CheckError(f"the right camera sits at ({x:+.3f}, {y:+.3f}, {z:+.3f}) m in the left optical frame: no "
-                     "side-by-side or vertical rectification holds this baseline", path=profile.name,
-                     field="extrinsics.translation_m",
-                     hint="check the profile's T: a diagonal baseline is a calibration mistake; recalibrate "
-                     "with s2r calibrate")
-
-
 def _downscale_note(size: tuple[int, int]) -> str:
     scale = detection_scale(size)
     if scale >= 1.0:
@@ -236,55 +202,9 @@ def _downscale_note(size: tuple[int, int]) -> str:
     return note
 
 
-_Task = tuple[StereoProfile, StereoRectification, str, NDArray[np.uint8], NDArray[np.uint8]]
-
-
-def _match_task(task: _Task) -> FrameMatches:
-    """One pair's matches (a worker function: one picklable argument)."""
-    return match_frame(task[0], task[1], task[3], task[4], name=task[2])
-
-
-def match_pairs(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.uint8], NDArray[np.uint8]]], *,
-                progress: ProgressCallback | None = None, total: int | None = None, jobs: int = 1
-                ) -> list[FrameMatches]:
-    """Matched frames of raw grey pairs ``(name, left, right)`` for ``profile`` (turned for a vertical rig), in
-    input order. With ``jobs`` > 1 the pairs are matched in that many worker processes (OpenCV single-threaded,
-    :func:`s2r.cvpool.opencv_pool`), at most ``2 * jobs`` pairs in flight, so a long recording is never all in
-    memory; the matches are the same as in one process.
-    """
-    working, rect, turn = _working(profile)
-
-    def tasks() -> Iterator[_Task]:
-        for name, left, right in pairs:
-            check_image_sizes(profile, name, left, right)
-            if turn is not None:
-                left, right = turn.image(left), turn.image(right)
-            yield working, rect, name, left, right
-
-    frames: list[FrameMatches] = []
-
-    def done(frame: FrameMatches) -> None:
-        frames.append(frame)
-        report(progress, len(frames), total or len(frames), "matching features")
-    if jobs <= 1:
-        for task in tasks():
-            done(_match_task(task))
-        return frames
-    with opencv_pool(jobs) as pool:
-        pool.submit(os.getpid).result()  # forks every worker now, before a reader or progress thread exists
-        pending: deque[Future[FrameMatches]] = deque()
-        for task in tasks():
-            pending.append(pool.submit(_match_task, task))
-            while len(pending) >= 2 * jobs:
-                done(pending.popleft().result())
-        while pending:
-            done(pending.popleft().result())
-    return frames
-
-
 def regated(profile: StereoProfile, frames: Sequence[FrameMatches]) -> list[FrameMatches]:
     """``frames`` (matched for some profile of the same images) gated again for ``profile``."""
-    working, rect, _ = _working(profile)
+    working, rect, _ = working_profile(profile)
     out = []
     for f in frames:
         if f.raw is None:
@@ -370,7 +290,7 @@ def summarise(given: StereoProfile, frames: Sequence[FrameMatches], *, settings:
               look_for_swap: bool = True) -> DriftResult:
     """The fit, sigma, costs and verdict of matched ``frames`` for the profile ``given``; the rotation and its
     sigmas are given in the profile's own camera axes (also for a vertical rig, checked turned)."""
-    profile, rect, turn = _working(given)
+    profile, rect, turn = working_profile(given)
     swap = find_swap(profile, rect, frames) if look_for_swap else None
     estimate, sift = _estimate(profile, rect, frames, settings, swap)
     left, right, n = sift.left, sift.right, sift.count

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import multiprocessing
-import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import as_completed
 from typing import TypeVar
 
 from s2r.errors import RenderError
-from s2r.executor import local_pool
+from s2r.executor import local_pool, usable_cores
 from s2r.progress import ProgressCallback, report
 
 __all__ = ["resolve_jobs", "run_jobs"]
@@ -19,11 +18,11 @@ ResultT = TypeVar("ResultT")
 
 
 def resolve_jobs(jobs: int | None, count: int) -> int:
-    """Worker count: ``jobs`` (default ``os.cpu_count()``), at most ``count``, at least 1 (1 inside a
+    """Worker count: ``jobs`` (default the usable cores), at most ``count``, at least 1 (1 inside a
     daemonic pool worker, which may not start processes)."""
     if jobs is not None and jobs < 1:
         raise RenderError(f"jobs must be at least 1, got {jobs}", field="jobs", hint="pass --jobs 1 or more")
-    wanted = jobs if jobs is not None else (os.cpu_count() or 1)
+    wanted = jobs if jobs is not None else usable_cores()
     if multiprocessing.current_process().daemon:
         return 1  # a pool worker cannot start its own pool: render in this process
     return max(1, min(wanted, count))

@@ -8,13 +8,13 @@ pipeline). The expensive per-profile stages run as independent tasks in parallel
 from __future__ import annotations
 
 import logging
-import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from s2r.errors import ValidateError
+from s2r.executor import usable_cores
 from s2r.profile import StereoProfile
 from s2r.validate.advice.causes import RootCause, group_failures
 from s2r.validate.advice.edits import Edit, suggest_edits
@@ -264,7 +264,7 @@ def validate(sim: StereoProfile, real: StereoProfile | None = None, *, tolerance
     start = time.perf_counter()
     _static_stages(result, sim, real)
     result.seconds["static"] = time.perf_counter() - start
-    workers = jobs if jobs is not None else (os.cpu_count() or 1)
+    workers = jobs if jobs is not None else usable_cores()
     outputs = run_tasks(roles, settings, tol, jobs=workers, progress=progress)
     for (kind, role), value in sorted(outputs.items(), key=lambda item: list(roles).index(item[0][1])):
         if kind == "recovery":

@@ -12,6 +12,17 @@ import pytest
 from s2r.cli import build_parser, main
 from tests.drift.conftest import rig, write_recording
 
+#: One run of every command that takes --jobs (OUT: the test folder, IN: an empty input folder in it).
+EVERY_JOBS_COMMAND = [
+    ["depth", "realsense_d435_848x480", "a.png", "b.png", "-o", "OUT/o"],
+    ["calibrate", "IN", "--pattern", "9x6", "--square", "0.025", "-o", "OUT/c.yaml"],
+    ["check", "realsense_d435_848x480", "IN"],
+    ["render", "boards", "realsense_d435_848x480", "-o", "OUT/b"],
+    ["render", "scene", "realsense_d435_848x480", "-o", "OUT/s"],
+    ["validate", "realsense_d435_848x480", "realsense_d435_848x480"],
+    ["fleet", "check", "IN/fleet.yaml", "-o", "OUT/f"],
+]
+
 
 def _subparser(parser: argparse.ArgumentParser, *path: str) -> argparse.ArgumentParser:
     for name in path:
@@ -44,15 +55,7 @@ def test_a_bad_job_count_names_both_spellings(name: str, tmp_path: Path, capsys:
     assert "--jobs/--workers: must be at least 1, got 0" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("argv", [
-    ["depth", "realsense_d435_848x480", "a.png", "b.png", "-o", "OUT/o"],
-    ["calibrate", "IN", "--pattern", "9x6", "--square", "0.025", "-o", "OUT/c.yaml"],
-    ["check", "realsense_d435_848x480", "IN"],
-    ["render", "boards", "realsense_d435_848x480", "-o", "OUT/b"],
-    ["render", "scene", "realsense_d435_848x480", "-o", "OUT/s"],
-    ["validate", "realsense_d435_848x480", "realsense_d435_848x480"],
-    ["fleet", "check", "IN/fleet.yaml", "-o", "OUT/f"],
-])
+@pytest.mark.parametrize("argv", EVERY_JOBS_COMMAND)
 def test_every_command_refuses_a_bad_job_count_in_the_same_words(argv: list[str], tmp_path: Path,
                                                                   capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "IN").mkdir()
@@ -79,3 +82,17 @@ def test_check_takes_profile_as_an_option(tmp_path: Path, capsys: pytest.Capture
     assert all(r == results[0] for r in results[1:])
     assert main(["check", "--profile", str(profile), str(tmp_path / "other.yaml"), str(folder)]) == 2
     assert "two profiles given" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", EVERY_JOBS_COMMAND)
+def test_every_command_refuses_more_local_workers_than_the_cores_can_hold(argv: list[str], tmp_path: Path,
+                                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    from s2r.executor import usable_cores
+
+    (tmp_path / "IN").mkdir()
+    argv = [a.replace("OUT", str(tmp_path)).replace("IN", str(tmp_path / "IN")) for a in argv]
+    cores = usable_cores()
+    assert main([*argv, "--jobs", str(4 * cores + 1)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --jobs/--workers: {4 * cores + 1} local worker processes on {cores} usable cores")
+    assert f"at most {4 * cores} here" in err and "Traceback" not in err

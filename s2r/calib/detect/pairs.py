@@ -11,7 +11,7 @@ collects the results in input order.
 from __future__ import annotations
 
 import contextlib
-import os
+import logging
 import threading
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -19,12 +19,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from s2r.calib.detect.stream import CornerCache, Detection, DetectItem, detect_stream
-from s2r.cvpool import opencv_pool
+from s2r.cvpool import opencv_pool_or_none
 from s2r.errors import CalibrationError
+from s2r.executor import usable_cores
 from s2r.fileio import sha256_file
 from s2r.progress import ProgressCallback
 
 __all__ = ["DetectedPairs", "PairDetection", "display_name"]
+
+log = logging.getLogger(__name__)
 
 
 def display_name(path: Path) -> str:
@@ -74,12 +77,12 @@ class PairDetection:
         self._error: BaseException | None = None
         self._stop = threading.Event()
         self._workers = contextlib.ExitStack()
-        jobs = jobs or os.cpu_count() or 1
+        jobs = jobs or usable_cores()
         cache = CornerCache(cache_dir) if cache_dir is not None else None
         pool = None
         if jobs > 1 and self.left:
-            pool = self._workers.enter_context(opencv_pool(jobs))
-            pool.submit(os.getpid).result()  # forks every worker now, from this thread (see the module doc)
+            pool = opencv_pool_or_none(jobs, self._workers, "detecting")  # forks now, from this thread (module doc)
+            jobs = jobs if pool is not None else 1
         self._thread = threading.Thread(target=self._run, args=(jobs, cache, progress, pool),
                                         name="s2r-detection", daemon=True)
         self._thread.start()

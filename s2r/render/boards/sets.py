@@ -130,7 +130,7 @@ def render_board_set(
         supersample: render at this factor and average down (TinyRenderer has no anti-aliasing).
         noise_sigma: image noise, grey levels: sigma in the grey image before rounding (the one meaning:
             :func:`s2r.render.rig.finish_image`).
-        jobs: worker processes (default ``os.cpu_count()``; 1 renders in this process).
+        jobs: worker processes (default the usable cores, ``s2r.executor.usable_cores``; 1 renders in this process).
         force: reuse a non-empty ``out_dir`` (replaces the set's own numbered files).
         progress: ``callback(done, total, label)``.
         right_gain: exposure/gain of the right camera relative to the left.

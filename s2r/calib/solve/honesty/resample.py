@@ -23,6 +23,8 @@ The fold solves run in parallel in s2r's process pool (:func:`s2r.cvpool.opencv_
 
 from __future__ import annotations
 
+import contextlib
+import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import TypeVar
@@ -35,12 +37,14 @@ from s2r.calib.solve.solvers.joint import NEAR_GAUSS_NEWTON, WARM_DAMPING, Joint
 from s2r.calib.solve.solvers.jointterms import Masks, all_residuals, normal_equations, prepare
 from s2r.calib.solve.solvers.jointterms import State as SolveState
 from s2r.calib.solve.solvers.observations import StereoObservation
-from s2r.cvpool import opencv_pool
+from s2r.cvpool import opencv_pool_or_none
 from s2r.errors import CalibrationError
 from s2r.lens.models import LensModel
 
 __all__ = ["BLUNDER_FLOOR_PX", "BLUNDER_SIGMAS", "FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std",
            "run_fold", "run_folds", "split_folds", "trim_blunders"]
+
+log = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
 T = TypeVar("T")
@@ -213,11 +217,12 @@ def run_folds(tasks: Sequence[FoldTask], *, jobs: int, side: Callable[[], T] | N
     """Every task, over ``jobs`` processes of s2r's pool (in this process when ``jobs`` is 1); the result of
     ``side`` (a picklable call, submitted first so it runs beside the folds); and the outcomes of the tasks
     ``then`` makes of that result (submitted as soon as it is known, e.g. only when it is worth testing)."""
-    if jobs <= 1 or len(tasks) <= 1:
-        extra = None if side is None else side()
-        more = [] if extra is None or then is None else then(extra)
-        return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
-    with opencv_pool(min(jobs, len(tasks))) as pool:
+    with contextlib.ExitStack() as stack:
+        pool = opencv_pool_or_none(min(jobs, len(tasks)), stack, "solving the folds")
+        if pool is None:
+            extra = None if side is None else side()
+            more = [] if extra is None or then is None else then(extra)
+            return [run_fold(t) for t in tasks], extra, [run_fold(t) for t in more]
         side_future = None if side is None else pool.submit(side)
         futures = [pool.submit(run_fold, t) for t in tasks]
         extra = None if side_future is None else side_future.result()

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -24,6 +23,7 @@ from s2r.calib.solve.pipelines.stereo import make_camera
 from s2r.calib.solve.pipelines.stereo_figures import board_text, dropped_warning, repeat_warning
 from s2r.calib.solve.solvers.cvsolve import MonoSolution, outlier_threshold, solve_mono
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, merge_repeats, no_board_error, select_diverse, too_few_error
+from s2r.executor import usable_cores
 from s2r.fileio import sha256_file
 from s2r.lens.fold import fold_warnings
 from s2r.lens.models import DEFAULT_LENS, LENS_MODELS
@@ -111,7 +111,7 @@ def calibrate_mono(paths: Sequence[Path], *, pattern: tuple[int, int], square_m:
     items = (DetectItem(name=f"{Path(p).parent.name}/{Path(p).name}", sha256=hashes[Path(p)], source=Path(p))
              for p in paths)
     cache = CornerCache(cache_dir) if cache_dir is not None else None
-    jobs = jobs or os.cpu_count() or 1
+    jobs = jobs or usable_cores()
     dets = list(detect_stream(items, pattern=pattern, jobs=jobs, cache=cache, total=len(paths), progress=progress))
     result = calibrate_mono_detections(dets, pattern=pattern, square_m=square_m, name=name, distortion=distortion,
                                        max_error_px=max_error_px, jobs=jobs, compare=compare,

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
@@ -43,6 +42,7 @@ from s2r.calib.solve.views import (
     too_few_error,
 )
 from s2r.errors import CalibrationError
+from s2r.executor import usable_cores
 from s2r.lens.fold import fold_warnings
 from s2r.lens.models import DEFAULT_LENS, LENS_MODELS, lens_model
 from s2r.profile import (
@@ -264,7 +264,7 @@ def calibrate_stereo_detections(
                                                       distortion=distortion, max_error_px=max_error_px)
     held, models, held_w, warped = stereo_heldout(
         names, pl, pr, obj, sol, lens=lens_model(distortion), compare=tuple(LENS_MODELS) if compare else (),
-        max_error_px=max_error_px, jobs=jobs or os.cpu_count() or 1, warp_solve=warp_solve)
+        max_error_px=max_error_px, jobs=jobs or usable_cores(), warp_solve=warp_solve)
     sol, held, warp_figures = choose_warp(sol, held, warped, held_w)
     keep = [selected[i] for i in sol.keep]
     pl, pr = [views.left[i] for i in keep], [views.right[i] for i in keep]
@@ -381,7 +381,7 @@ def calibrate_detected_pairs(
     result = calibrate_stereo_detections(
         found.pairs, pattern=detection.pattern, square_m=square_m, name=name, distortion=distortion,
         max_error_px=max_error_px, fix_intrinsics=fix_intrinsics, sources=sources, extra_dropped=extra,
-        compare=compare, jobs=jobs or os.cpu_count() or 1)
+        compare=compare, jobs=jobs or usable_cores())
     report(progress, 1, 1, "solving")
     idx = [n for n, _, _ in found.pairs].index(result.used_names[0])
     view_paths = {n: (a, b) for (n, _, _), a, b in zip(found.pairs, found.left, found.right, strict=True)}

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
@@ -15,6 +14,7 @@ from numpy.typing import NDArray
 from s2r.calib.detect import CornerCache, DetectItem, detect_stream
 from s2r.calib.solve.pipelines.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.errors import CalibrationError
+from s2r.executor import usable_cores
 from s2r.fileio import sha256_file
 from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import SourceFile
@@ -75,7 +75,7 @@ def calibrate_stereo_bag(
 
     cache = CornerCache(cache_dir, target) if cache_dir is not None else None
     total = max(1, n_max if max_frames is None else min(n_max, max_frames))
-    dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
+    dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or usable_cores(), cache=cache,
                               total=2 * total, progress=progress, target=target))
     if not names:
         raise CalibrationError(f"no {left_topic} / {right_topic} messages with stamps within {max_dt_s} s",
@@ -86,7 +86,7 @@ def calibrate_stereo_bag(
 
         result = calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
-            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag), jobs=jobs or os.cpu_count() or 1)
+            fix_intrinsics=fix_intrinsics, swap=swap, sources=_bag_sources(bag), jobs=jobs or usable_cores())
         sample = next((samples[n] for n in result.used_names if n in samples), None)
         return replace(result, sample_images=sample if sample is None or not swap else (sample[1], sample[0]))
     result = calibrate_stereo_detections(

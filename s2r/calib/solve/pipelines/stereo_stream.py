@@ -11,7 +11,6 @@ how many became views, and why the others did not.
 from __future__ import annotations
 
 import hashlib
-import os
 from collections import Counter
 from collections.abc import Iterator, Sequence
 from dataclasses import replace
@@ -26,6 +25,7 @@ from s2r.calib.detect.sharpness import BLUR_RATIO, BlurFilter
 from s2r.calib.solve.pipelines.stereo import StereoCalibration, calibrate_stereo_detections
 from s2r.calib.solve.views import REPEAT_PX, repeat_distance
 from s2r.errors import CalibrationError
+from s2r.executor import usable_cores
 from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import DroppedView, SourceFile
 from s2r.progress import ProgressCallback
@@ -132,7 +132,7 @@ def calibrate_stereo_stream(
             yield DetectItem(name=f"{frame.name} right", sha256=_sha(frame.right), source=frame.right)
 
     cache = CornerCache(cache_dir, target) if cache_dir is not None else None
-    dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or os.cpu_count() or 1, cache=cache,
+    dets = list(detect_stream(items(), pattern=pattern, jobs=jobs or usable_cores(), cache=cache,
                               total=None if total is None else 2 * total, progress=progress, target=target))
     read = len(names) + len(blurred)
     if not read:
@@ -156,8 +156,8 @@ def _solve(pairs: list[Pair], dropped: list[DroppedView], *, sources: Sequence[S
         return calibrate_stereo_target_detections(
             pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
             fix_intrinsics=fix_intrinsics, swap=swap, sources=sources, extra_dropped=dropped,
-            jobs=jobs or os.cpu_count() or 1)
+            jobs=jobs or usable_cores())
     return calibrate_stereo_detections(
         pairs, pattern=pattern, square_m=square_m, name=name, distortion=distortion, max_error_px=max_error_px,
         fix_intrinsics=fix_intrinsics, swap=swap, sources=sources, extra_dropped=dropped,
-        jobs=jobs or os.cpu_count() or 1)
+        jobs=jobs or usable_cores())

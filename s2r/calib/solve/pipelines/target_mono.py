@@ -9,7 +9,6 @@ reported and written to the profile), the dropped views with their reasons, the 
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -32,6 +31,7 @@ from s2r.calib.solve.solvers.targetcal import (
     to_camera,
 )
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
+from s2r.executor import usable_cores
 from s2r.lens.fold import fold_warnings
 from s2r.lens.models import DEFAULT_LENS
 from s2r.profile import MonoProfile, Provenance, SourceFile
@@ -51,7 +51,7 @@ def calibrate_mono_target(
     """Calibrate one camera from image files of ``target`` (partial views used) through ``lens``; see
     :func:`calibrate_mono_target_detections`."""
     hashes: dict[Path, str] = {}
-    jobs = jobs or os.cpu_count() or 1
+    jobs = jobs or usable_cores()
     dets = _detect(paths, target, jobs=jobs, cache_dir=cache_dir, progress=progress, hashes=hashes)
     result = calibrate_mono_target_detections(
         dets, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px, jobs=jobs,

@@ -9,7 +9,6 @@ chessboard through a fisheye lens comes here as a Kalibr checkerboard target.
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -45,6 +44,7 @@ from s2r.calib.solve.solvers.targetcal import (
     to_camera,
 )
 from s2r.calib.solve.views import MIN_VIEWS, check_sizes, too_few_error
+from s2r.executor import usable_cores
 from s2r.fileio import sha256_file
 from s2r.lens.fold import fold_warnings
 from s2r.lens.models import DEFAULT_LENS
@@ -318,7 +318,7 @@ def _detect(paths: Sequence[Path], target: AnyTarget, *, jobs: int | None, cache
         return out
 
     cache = CornerCache(cache_dir, target) if cache_dir is not None else None
-    return list(detect_stream(items(), pattern=(0, 0), jobs=jobs or os.cpu_count() or 1, cache=cache,
+    return list(detect_stream(items(), pattern=(0, 0), jobs=jobs or usable_cores(), cache=cache,
                               total=len(paths), progress=progress, target=target))
 
 
@@ -342,7 +342,7 @@ def calibrate_stereo_target(
         pairs, target=target, lens=lens, distortion=distortion, name=name, max_error_px=max_error_px,
         fix_intrinsics=fix_intrinsics, swap=swap,
         sources=[SourceFile(path=str(p), sha256=h) for p, h in hashes.items()],
-        extra_dropped=extra, jobs=jobs or os.cpu_count() or 1)
+        extra_dropped=extra, jobs=jobs or usable_cores())
     report(progress, 1, 1, "solving")
     idx = labels.index(result.used_names[0])
     sample = (Path(right_paths[idx]), Path(left_paths[idx])) if swap else (Path(left_paths[idx]),

@@ -1,129 +1,32 @@
 """The one executor seam for s2r's parallel work: local processes by default, Dask distributed on request.
 
-Every stage that runs work in parallel (corner detection, validate's renders, fleet checks) takes its pool
-from here, so a new backend is added once:
-
-- :func:`local_pool`: a ``concurrent.futures.ProcessPoolExecutor`` whose workers start by ``fork`` where it
-  exists (instant, cv2 already loaded, the caller's ``__main__`` never re-imported) and die with their parent,
-  even when the parent is killed with ``kill -9``; :func:`s2r.cvpool.opencv_pool` wraps it for OpenCV
-  work (calibrate's detection and fold solves, check's feature matching);
-- :func:`open_runner`: a :class:`TaskRunner` over either that pool or a Dask ``distributed.Client`` (an
-  existing scheduler at ``tcp://host:8786``, or a local cluster of worker processes started for the run).
-  ``distributed`` is imported only when Dask is asked for.
-
-Tasks must be module-level functions with picklable arguments and results.
-
-Programs s2r starts (a spawned Dask worker, the MuJoCo probe) get :func:`child_environment`: ``import cv2``
-leaves LD_LIBRARY_PATH ending in an empty entry, which the dynamic loader reads as the current folder.
+:func:`open_runner` gives a :class:`TaskRunner` over either :func:`s2r.executor.local.local_pool` or a Dask
+``distributed.Client`` (an existing scheduler at ``tcp://host:8786``, or a local cluster of worker processes
+started for the run). ``distributed`` is imported only when Dask is asked for. Tasks must be module-level functions
+with picklable arguments and results.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import multiprocessing as mp
-import os
-import re
-import signal
-import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import as_completed as futures_completed
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 from s2r.errors import S2RError
+from s2r.executor.local import children_search_no_relative_folder, local_pool
 
-__all__ = ["SchedulerLost", "TaskOutcome", "TaskRunner", "child_environment", "children_search_no_relative_folder",
-           "local_pool", "open_runner"]
+__all__ = ["SCHEDULER_DEADLINE_S", "SchedulerLost", "TaskOutcome", "TaskRunner", "open_runner"]
 
 ItemT = TypeVar("ItemT")
 ResultT = TypeVar("ResultT")
 
-_PR_SET_PDEATHSIG = 1  # linux/prctl.h
-_WATCHDOG_PERIOD_S = 1.0
 #: How long a Dask scheduler may take to answer (s): connect and handshake together, a hard deadline.
 SCHEDULER_DEADLINE_S = 6.0
 _CLOSE_S = 5.0
-
-
-def _die_with_parent(parent_pid: int) -> None:
-    """Pool initializer: end this worker when the parent process dies, even by ``kill -9``.
-
-    On Linux the kernel sends SIGKILL when the parent goes (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon
-    thread also watches the parent pid once a second and exits when the worker was re-parented.
-    """
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if os.getppid() != parent_pid:  # the parent died before the line above took effect
-        os._exit(1)
-
-    def watch() -> None:
-        while True:
-            time.sleep(_WATCHDOG_PERIOD_S)
-            if os.getppid() != parent_pid:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="s2r-parent-watchdog", daemon=True).start()
-
-
-def child_environment(env: Mapping[str, str] | None = None) -> dict[str, str]:
-    """``env`` (default ``os.environ``) for a program s2r starts, with only the LD_LIBRARY_PATH entries that do
-    not depend on the current folder: absolute paths and ``$ORIGIN`` ones (the executable's folder); the variable
-    is dropped when none is left.
-
-    ``import cv2`` (opencv-python) sets LD_LIBRARY_PATH to its own folder followed by the old value, and leaves a
-    trailing empty entry when there was none. The dynamic loader reads an empty or relative entry against the
-    current folder, so every child would first look there for its libraries (``libpython3.11.so.1.0``,
-    ``libc.so.6``, ...): a library planted in the folder s2r runs from would run inside the child. glibc splits
-    the variable at ``;`` as well as ``:``, so both separate entries here."""
-    out = dict(os.environ if env is None else env)
-    value = out.get("LD_LIBRARY_PATH")
-    if value is not None:
-        kept = [entry for entry in re.split(r"[:;]", value)
-                if entry.startswith(("/", "$ORIGIN", "${ORIGIN}"))]
-        if kept:
-            out["LD_LIBRARY_PATH"] = ":".join(kept)
-        else:
-            del out["LD_LIBRARY_PATH"]
-    return out
-
-
-@contextlib.contextmanager
-def children_search_no_relative_folder() -> Iterator[None]:
-    """While open, ``os.environ``'s LD_LIBRARY_PATH is :func:`child_environment`'s, for children started by
-    code that takes no environment (multiprocessing's spawn, Dask's nannies); restored on exit."""
-    before = os.environ.get("LD_LIBRARY_PATH")
-    clean = child_environment().get("LD_LIBRARY_PATH")
-    _set_library_path(clean)
-    try:
-        yield
-    finally:
-        _set_library_path(before)
-
-
-def _set_library_path(value: str | None) -> None:
-    if value is None:
-        os.environ.pop("LD_LIBRARY_PATH", None)
-    else:
-        os.environ["LD_LIBRARY_PATH"] = value
-
-
-def local_pool(jobs: int) -> ProcessPoolExecutor:
-    """A process pool of ``jobs`` workers that die with this process.
-
-    fork: workers start instantly with cv2 loaded and never re-import the caller's ``__main__`` (scripts
-    without a main guard keep working); spawn where fork does not exist. Never call ``cv2.setNumThreads`` in a
-    forked child: it waits for the parent's pool threads, which do not exist there, and hangs.
-    """
-    if jobs < 1:
-        raise S2RError(f"must be at least 1, got {jobs}", field="jobs", hint="e.g. 2")
-    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with_parent,
-                               initargs=(os.getpid(),))
 
 
 @dataclass(frozen=True)
