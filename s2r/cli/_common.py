@@ -196,8 +196,18 @@ def add_recording_inputs(parser: argparse.ArgumentParser) -> None:
 def add_jobs(parser: Any, *, default: int | None, help: str) -> None:
     """Add ``--jobs N`` (dest ``jobs``), the one name of parallelism across commands (calibrate, render,
     validate, depth, fleet check), with ``--workers`` as a hidden alias (depth and fleet check's former name)."""
-    parser.add_argument("--jobs", type=int, default=default, metavar="N", help=help)
-    parser.add_argument("--workers", type=int, dest="jobs", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    parser.add_argument("--jobs", type=_process_count, default=default, metavar="N", help=help)
+    parser.add_argument("--workers", type=_process_count, dest="jobs", default=argparse.SUPPRESS,
+                        help=argparse.SUPPRESS)
+
+
+def _process_count(text: str) -> int:
+    """``--jobs``'s argparse type: a whole number (its range is :func:`check_jobs`'s)."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number of processes, got {text!r} "
+                                         "(e.g. --jobs 2)") from None
 
 
 #: Local worker processes per usable core ``--jobs`` may ask for: each holds images, so more is memory, not speed.

@@ -106,12 +106,14 @@ def match_pairs(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
         if pool is None:
             for task in tasks():
                 done(_match_task(task))
-            return frames
-        pending: deque[Future[FrameMatches]] = deque()
-        for task in tasks():
-            pending.append(pool.submit(_match_task, task))
-            while len(pending) >= 2 * jobs:
+        else:
+            pending: deque[Future[FrameMatches]] = deque()
+            for task in tasks():
+                pending.append(pool.submit(_match_task, task))
+                while len(pending) >= 2 * jobs:
+                    done(pending.popleft().result())
+            while pending:
                 done(pending.popleft().result())
-        while pending:
-            done(pending.popleft().result())
+    if frames and total is not None and len(frames) < total:  # fewer pairs than --max-frames: the stage is over
+        report(progress, len(frames), len(frames), "matching features")
     return frames

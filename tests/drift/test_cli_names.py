@@ -96,3 +96,11 @@ def test_every_command_refuses_more_local_workers_than_the_cores_can_hold(argv: 
     err = capsys.readouterr().err
     assert err.startswith(f"error: --jobs/--workers: {4 * cores + 1} local worker processes on {cores} usable cores")
     assert f"at most {4 * cores} here" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("name", ["--jobs", "--workers"])
+def test_a_job_count_that_is_not_a_number_is_named(name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["check", "realsense_d435_848x480", "rec", name, "abc"])
+    assert exit_info.value.code == 2
+    assert f"argument {name}: must be a whole number of processes, got 'abc' (e.g. --jobs 2)" in capsys.readouterr().err

@@ -44,3 +44,11 @@ def test_a_wrong_size_pair_mid_stream_stops_the_pooled_check(recording: Path) ->
     pairs[3] = (name, cv2.resize(left, (240, 180)), right)
     with pytest.raises(CheckError, match="left image is 240x180 px"):
         match_pairs(rig(), iter(pairs), jobs=2)
+
+
+def test_progress_ends_at_the_pairs_found_when_fewer_than_max_frames(recording: Path) -> None:
+    pairs = list(read_pairs(StereoSource(folder=recording)))
+    for jobs in (1, 2):
+        seen: list[tuple[int, int]] = []
+        match_pairs(rig(), iter(pairs), jobs=jobs, progress=lambda d, t, _, into=seen: into.append((d, t)), total=20)
+        assert seen[-1] == (len(pairs), len(pairs)) and seen[-2] == (len(pairs), 20)
