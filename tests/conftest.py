@@ -73,3 +73,18 @@ def distorted_rig() -> StereoProfile:
     """A rig with mild barrel distortion and a slight rotation between the cameras."""
     return make_rig(name="distorted_rig", distortion=(-0.12, 0.05, 0.0, 0.0, 0.0), rotation_deg=(0.3, -0.5, 0.2),
                     cx=322.0, cy=238.5)
+
+
+#: A xacro file defining a ``cam`` macro (params ``side``, ``y``): a 640x480 Gazebo camera on a link fixed to ``base``.
+CAMERA_MACRO_XACRO = """<?xml version="1.0"?>
+<robot xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:macro name="cam" params="side y">
+    <link name="${side}_link"/>
+    <joint name="${side}_joint" type="fixed"><parent link="base"/><child link="${side}_link"/>
+      <origin xyz="0 ${y} 0" rpy="0 0 0"/></joint>
+    <gazebo reference="${side}_link"><sensor type="camera" name="${side}_cam"><update_rate>30</update_rate>
+      <camera><horizontal_fov>1.047</horizontal_fov><image><width>640</width><height>480</height></image>
+      </camera></sensor></gazebo>
+  </xacro:macro>
+</robot>
+"""

@@ -16,7 +16,7 @@ import pytest
 from s2r.cli import main
 from s2r.errors import OutputExistsError
 from s2r.fileio import check_output_free, protect_read_files, protecting_inputs
-from tests.conftest import shared_data
+from tests.conftest import CAMERA_MACRO_XACRO, shared_data
 from tests.depth.stream_inputs import (
     LEFT_TOPIC,
     RIGHT_TOPIC,
@@ -153,18 +153,7 @@ def test_depth_never_replaces_a_folder_an_input_subfolder_links_into(known: dict
 
 def test_from_urdf_never_writes_over_an_included_xacro(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cams = tmp_path / "cams.xacro"
-    cams.write_text("""<?xml version="1.0"?>
-<robot xmlns:xacro="http://www.ros.org/wiki/xacro">
-  <xacro:macro name="cam" params="side y">
-    <link name="${side}_link"/>
-    <joint name="${side}_joint" type="fixed"><parent link="base"/><child link="${side}_link"/>
-      <origin xyz="0 ${y} 0" rpy="0 0 0"/></joint>
-    <gazebo reference="${side}_link"><sensor type="camera" name="${side}_cam"><update_rate>30</update_rate>
-      <camera><horizontal_fov>1.047</horizontal_fov><image><width>640</width><height>480</height></image>
-      </camera></sensor></gazebo>
-  </xacro:macro>
-</robot>
-""")
+    cams.write_text(CAMERA_MACRO_XACRO)
     main_file = tmp_path / "rig.urdf.xacro"
     main_file.write_text("""<?xml version="1.0"?>
 <robot name="rig" xmlns:xacro="http://www.ros.org/wiki/xacro">

@@ -14,6 +14,7 @@ from s2r.errors import SourceError
 from s2r.sources import lint_description, load_description, load_description_profile
 from s2r.sources.kinematics import KinematicTree
 from s2r.sources.loader import optical_pose
+from tests.conftest import CAMERA_MACRO_XACRO
 from tests.sources.rigs import FIXED_URDF, SEED_URDF, XBOT_SDF, joint, sensor, two_camera_urdf, urdf, write
 
 S30, C30 = 0.5, math.sqrt(3) / 2
@@ -138,18 +139,7 @@ def test_xacro_macros_with_arguments_and_find(tmp_path: Path, monkeypatch: pytes
                                               capsys: pytest.CaptureFixture[str]) -> None:
     pkg = tmp_path / "ws" / "src" / "my_cams"
     write(pkg, "package.xml", "<package><name>my_cams</name></package>\n")
-    write(pkg, "urdf/camera.xacro", """<?xml version="1.0"?>
-<robot xmlns:xacro="http://www.ros.org/wiki/xacro">
-  <xacro:macro name="cam" params="side y">
-    <link name="${side}_link"/>
-    <joint name="${side}_joint" type="fixed"><parent link="base"/><child link="${side}_link"/>
-      <origin xyz="0 ${y} 0" rpy="0 0 0"/></joint>
-    <gazebo reference="${side}_link"><sensor type="camera" name="${side}_cam"><update_rate>30</update_rate>
-      <camera><horizontal_fov>1.047</horizontal_fov><image><width>640</width><height>480</height></image>
-      </camera></sensor></gazebo>
-  </xacro:macro>
-</robot>
-""")
+    write(pkg, "urdf/camera.xacro", CAMERA_MACRO_XACRO)
     main = write(tmp_path, "rig.urdf.xacro", """<?xml version="1.0"?>
 <robot name="rig" xmlns:xacro="http://www.ros.org/wiki/xacro">
   <xacro:arg name="baseline" default="0.1"/>
