@@ -264,6 +264,8 @@ def _run(args: argparse.Namespace) -> int:
 
 def _report(exc: Exception) -> int:
     """Print ``exc`` as one ``error:`` line; its exit code (2 for bad input, 3 for a bug in s2r)."""
+    from concurrent.futures.process import BrokenProcessPool
+
     from pydantic import ValidationError  # only on the error path: keeps `s2r --help` fast
 
     try:
@@ -275,7 +277,7 @@ def _report(exc: Exception) -> int:
             where = ".".join(str(p) for p in first["loc"]) or exc.title
             print(terminal_safe(f"error: {where}: {' '.join(str(first['msg']).split())}"), file=sys.stderr)
             return EXIT_BAD_INPUT
-        if type(exc).__name__ == "BrokenProcessPool":  # concurrent.futures' (loaded only where pools run)
+        if isinstance(exc, BrokenProcessPool):  # a worker killed from outside, not a fault of s2r's
             print("error: a worker process ended abruptly (killed by another program or the out-of-memory killer); "
                   "nothing was written (run again, or with --jobs 1 to use one process)", file=sys.stderr)
             return EXIT_BAD_INPUT

@@ -214,18 +214,21 @@ def _process_count(text: str) -> int:
 MAX_JOBS_PER_CORE = 4
 
 
-def check_jobs(jobs: int | None, error: Callable[..., Exception], *, local: bool = True) -> None:
+def check_jobs(jobs: int | None, error: Callable[..., Exception], *, local: bool = True, more: str = "") -> None:
     """Refuse ``--jobs`` below 1 (None is a command's default), or over :data:`MAX_JOBS_PER_CORE` times the cores
     this process may use when the workers are ``local`` processes, with ``error`` (the command's S2RError type):
-    one message for every command."""
+    one message for every command (``more``: where more workers can run, added to the hint)."""
+    if jobs is None:
+        return
+    if jobs < 1:
+        raise error(f"must be at least 1, got {jobs}", field="--jobs/--workers", hint="e.g. --jobs 2")
     from s2r.executor import usable_cores
 
-    if jobs is not None and jobs < 1:
-        raise error(f"must be at least 1, got {jobs}", field="--jobs/--workers", hint="e.g. --jobs 2")
     cores = usable_cores()
-    if jobs is not None and local and jobs > MAX_JOBS_PER_CORE * cores:
+    if local and jobs > MAX_JOBS_PER_CORE * cores:
         raise error(f"{jobs} local worker processes on {cores} usable cores", field="--jobs/--workers",
-                    hint=f"at most {MAX_JOBS_PER_CORE * cores} here; each holds images, so more only costs memory")
+                    hint=f"at most {MAX_JOBS_PER_CORE * cores} here; each holds images, so more only costs memory"
+                    + (f"; {more}" if more else ""))
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:

@@ -197,7 +197,8 @@ def _cmd_fleet(args: argparse.Namespace) -> int:
     from s2r.drift.fleet_store import check_history_folder
 
     settings = _settings(args)
-    check_jobs(args.jobs, CheckError, local=args.scheduler is None)  # more: a Dask cluster (--scheduler)
+    check_jobs(args.jobs, CheckError, local=args.scheduler is None,
+               more="for more, run a Dask cluster and pass --scheduler")
     jobs = load_fleet(args.fleet_file, settings=settings, max_frames=args.max_frames)
     history = check_history_folder(args.history) if args.history is not None else None
     journal = _fleet_output(args)

@@ -136,6 +136,7 @@ def _check_output(args: argparse.Namespace) -> None:
 
 def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     """Stream the input through the pipeline into the ``--to`` writer; publish whole; print a summary."""
+    from s2r.depth.stream import STAMP_SYNTHESIZED
     from s2r.depth.writers import StreamOptions, open_writer, write_stream
     from s2r.recordings import skipped_inputs
 
@@ -154,7 +155,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
         published = writer.publish()
     skipped = skipped_inputs(source)
     _warn_skipped(described, skipped)
-    synthesized = bool(seen.get("synthesized"))
+    synthesized = STAMP_SYNTHESIZED in seen.get("stamp_sources", ())
     if synthesized:
         log.warning("the input carries no time stamps (still files): stamps were synthesized, 1 s + 0.1 s per frame "
                     "(frames.csv / the bag say so)")
@@ -186,12 +187,11 @@ def _stamp_origin(seen: dict[str, Any]) -> str:
 
 
 def _noting(frames: Iterator[DepthFrame], seen: dict[str, Any]) -> Iterator[DepthFrame]:
-    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame), whether
-    any stamp was synthesized and where the stamps come from."""
+    """``frames`` unchanged, noting the frame_id the outputs carry (the first frame's rectified frame) and where
+    the stamps come from (``stamp_sources``: synthesized, recorded, file time)."""
     from s2r.depth.stream import rectified_frame_id
 
     for frame in frames:
         seen.setdefault("frame_id", rectified_frame_id(frame.frame_id))
-        seen["synthesized"] = seen.get("synthesized", False) or frame.stamp_synthesized
         seen.setdefault("stamp_sources", set()).add(frame.stamp_source)
         yield frame

@@ -21,12 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from s2r.drift.estimate import Estimate, MatchSet, estimate_rotation
-from s2r.drift.matches import (
-    FrameMatches,
-    RawMatches,
-    detection_scale,
-    gate_matches,
-)
+from s2r.drift.matches import FrameMatches, RawMatches, detection_scale, gate_matches
 from s2r.drift.matching import check_image_sizes, match_pairs, working_profile
 from s2r.drift.model import predict_right, robust_scale
 from s2r.drift.swap import SwapFinding, find_swap

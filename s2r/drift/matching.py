@@ -6,7 +6,6 @@ its side), each pair's size checked against it, and the pairs matched in input o
 from __future__ import annotations
 
 import contextlib
-import logging
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -23,8 +22,6 @@ from s2r.progress import ProgressCallback, report
 from s2r.rectification import StereoRectification, stereo_rectification
 
 __all__ = ["check_image_sizes", "match_pairs", "working_profile"]
-
-log = logging.getLogger(__name__)
 
 
 def check_image_sizes(profile: StereoProfile, name: str, left: NDArray[np.uint8], right: NDArray[np.uint8]) -> None:
@@ -101,6 +98,7 @@ def match_pairs(profile: StereoProfile, pairs: Iterable[tuple[str, NDArray[np.ui
     def done(frame: FrameMatches) -> None:
         frames.append(frame)
         report(progress, len(frames), total or len(frames), "matching features")
+
     with contextlib.ExitStack() as stack:
         pool = _matching_pool(profile, jobs, stack)
         if pool is None:

@@ -11,7 +11,6 @@ collects the results in input order.
 from __future__ import annotations
 
 import contextlib
-import logging
 import threading
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -26,8 +25,6 @@ from s2r.fileio import sha256_file
 from s2r.progress import ProgressCallback
 
 __all__ = ["DetectedPairs", "PairDetection", "display_name"]
-
-log = logging.getLogger(__name__)
 
 
 def display_name(path: Path) -> str:

@@ -24,7 +24,6 @@ The fold solves run in parallel in s2r's process pool (:func:`s2r.cvpool.opencv_
 from __future__ import annotations
 
 import contextlib
-import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import TypeVar
@@ -44,7 +43,6 @@ from s2r.lens.models import LensModel
 __all__ = ["BLUNDER_FLOOR_PX", "BLUNDER_SIGMAS", "FOLDS", "PARAMETERS", "FoldOutcome", "FoldTask", "jackknife_std",
            "run_fold", "run_folds", "split_folds", "trim_blunders"]
 
-log = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
 T = TypeVar("T")
