@@ -113,9 +113,10 @@ def _source(args: argparse.Namespace) -> Any:
 
 def _cmd_check(args: argparse.Namespace) -> int:
     from s2r.drift.check import run_check
-    from s2r.drift.source import profile_sizes, read_pairs, skipped_fields
+    from s2r.drift.source import profile_sizes, read_pairs
     from s2r.executor import usable_cores
     from s2r.fileio import atomic_write_text, check_output_free, prepare_output_dir
+    from s2r.recordings import skipped_fields
 
     args.profile = profile_argument(args, command="check")  # with --profile, the positional may be the FOLDER
     if args.fix != (args.output is not None):

@@ -89,16 +89,14 @@ def _frames(args: argparse.Namespace, pipeline: StereoPipeline) -> tuple[Any, st
     return source.frames(), source.describe(), source
 
 
-#: How many skipped inputs the warning names.
-_NAMED_SKIPPED = 5
-
-
 def _warn_skipped(described: str, skipped: list[str]) -> None:
     """Say how many inputs had no partner and were skipped, naming the first few."""
+    from s2r.recordings import NAMED_SKIPPED
+
     if skipped:
-        more = f" and {len(skipped) - _NAMED_SKIPPED} more" if len(skipped) > _NAMED_SKIPPED else ""
+        more = f" and {len(skipped) - NAMED_SKIPPED} more" if len(skipped) > NAMED_SKIPPED else ""
         log.warning("%s: %d input image(s) had no partner and were skipped (no depth for them): %s%s", described,
-                    len(skipped), ", ".join(skipped[:_NAMED_SKIPPED]), more)
+                    len(skipped), ", ".join(skipped[:NAMED_SKIPPED]), more)
 
 
 #: A global ROS graph-resource namespace (ROS 1 and ROS 2 naming rules): "/" or "/a/b_2" (no empty or digit-led parts).
@@ -138,7 +136,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     """Stream the input through the pipeline into the ``--to`` writer; publish whole; print a summary."""
     from s2r.depth.stream import STAMP_SYNTHESIZED
     from s2r.depth.writers import StreamOptions, open_writer, write_stream
-    from s2r.recordings import skipped_inputs
+    from s2r.recordings import skipped_fields, skipped_inputs
 
     _check_output(args)
     options = StreamOptions(namespace=args.namespace, depth_encoding=args.depth_encoding,
@@ -163,7 +161,7 @@ def run_stream(args: argparse.Namespace, pipeline: StereoPipeline) -> int:
     summary = {"profile": pipeline.profile.name, "preset": pipeline.preset, "to": args.to, "frames": count,
                "input": described, "output": str(args.output), "frame_id": seen.get("frame_id"),
                "stamps": stamps, "published": [str(p) for p in published],
-               "skipped_unpaired": len(skipped), "skipped_first": skipped[:_NAMED_SKIPPED]}
+               **skipped_fields(skipped)}
     if args.json:
         print_json(summary)
     else:

@@ -43,12 +43,13 @@ from s2r.drift.check import CheckSettings, check_drift
 from s2r.drift.fleet_remote import RemoteRecording, local_source
 from s2r.drift.fleet_store import Journal, job_key
 from s2r.drift.report import check_report_html
-from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs, skipped_fields
+from s2r.drift.source import GreyPair, StereoSource, profile_sizes, read_pairs
 from s2r.errors import CheckError, S2RError
 from s2r.executor import open_runner
 from s2r.fileio import TEMP_PREFIX, protect_input, read_text_file
 from s2r.names import NAME_HINT, is_safe_name
 from s2r.progress import ProgressCallback, report
+from s2r.recordings import skipped_fields
 from s2r.recordings.remote import RemoteError, check_url, is_url
 from s2r.safeparse import parse_yaml
 

@@ -18,12 +18,12 @@ from numpy.typing import NDArray
 
 from s2r.errors import CheckError
 from s2r.profile import StereoProfile
-from s2r.recordings import RecordingSpec, open_recording, skipped_inputs
+from s2r.recordings import NAMED_SKIPPED, RecordingSpec, open_recording, skipped_inputs
 from s2r.recordings.files import FileFrames
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "skipped_fields", "spread"]
+__all__ = ["Sizes", "StereoSource", "profile_sizes", "read_pairs", "spread"]
 
 GreyPair = tuple[str, NDArray[np.uint8], NDArray[np.uint8]]
 #: Expected (width, height) px of the left and the right images, or None for any size.
@@ -100,7 +100,8 @@ def read_pairs(source: StereoSource, *, sizes: Sizes = None, skipped: list[str] 
         sizes: the profile's ``((w, h) left, (w, h) right)`` px: an image declaring another size is a CheckError
             naming its file (or bag topic and stamp, or video), before it is decoded.
         skipped: filled, once the pairs are read, with the inputs that had no partner (image files, ``TOPIC @
-            STAMP ns`` bag messages), which were not checked (:func:`skipped_fields` puts them in ``--json``).
+            STAMP ns`` bag messages), which were not checked (:func:`s2r.recordings.skipped_fields` puts them in
+            ``--json``).
     """
     if source.max_frames < 1:
         raise CheckError(f"must be at least 1, got {source.max_frames}", field="--max-frames", hint="e.g. 20")
@@ -120,17 +121,7 @@ def _warning_skipped(pairs: Iterator[GreyPair], recording: object, noted: list[s
         noted[:] = skipped
     if skipped:
         log.warning("%d input image(s) had no partner and were not checked: %s%s", len(skipped),
-                    ", ".join(skipped[:_NAMED_SKIPPED]), ", ..." if len(skipped) > _NAMED_SKIPPED else "")
-
-
-#: How many skipped inputs the warning and ``skipped_first`` name.
-_NAMED_SKIPPED = 5
-
-
-def skipped_fields(skipped: list[str]) -> dict[str, Any]:
-    """The ``--json`` keys of the inputs a check skipped for want of a partner, as ``s2r depth`` names them:
-    ``skipped_unpaired`` (how many) and ``skipped_first`` (the first five)."""
-    return {"skipped_unpaired": len(skipped), "skipped_first": skipped[:_NAMED_SKIPPED]}
+                    ", ".join(skipped[:NAMED_SKIPPED]), ", ..." if len(skipped) > NAMED_SKIPPED else "")
 
 
 def _spread_stream(frames: Iterator[Any], source: StereoSource) -> Iterator[GreyPair]:

@@ -16,7 +16,15 @@ sensor_fit and validate, which consume frames. It imports no pipeline, solver or
 
 from __future__ import annotations
 
-from s2r.recordings.frames import FrameSource, StereoFrame, refuse_same_sides, skipped_inputs
+from s2r.recordings.frames import (
+    NAMED_SKIPPED,
+    FrameSource,
+    StereoFrame,
+    refuse_same_sides,
+    skipped_fields,
+    skipped_inputs,
+)
 from s2r.recordings.spec import RecordingSpec, open_recording
 
-__all__ = ["FrameSource", "RecordingSpec", "StereoFrame", "open_recording", "refuse_same_sides", "skipped_inputs"]
+__all__ = ["NAMED_SKIPPED", "FrameSource", "RecordingSpec", "StereoFrame", "open_recording", "refuse_same_sides",
+           "skipped_fields", "skipped_inputs"]

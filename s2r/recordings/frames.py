@@ -17,8 +17,8 @@ from s2r.errors import RecordingError
 if TYPE_CHECKING:
     from s2r.errors import S2RError
 
-__all__ = ["STAMP_FILE_TIME", "STAMP_RECORDED", "FrameSource", "StereoFrame", "refuse_same_sides", "skipped_inputs",
-           "thinned"]
+__all__ = ["NAMED_SKIPPED", "STAMP_FILE_TIME", "STAMP_RECORDED", "FrameSource", "StereoFrame", "refuse_same_sides",
+           "skipped_fields", "skipped_inputs", "thinned"]
 
 T = TypeVar("T")
 
@@ -76,6 +76,16 @@ def skipped_inputs(source: object) -> list[str]:
     """The inputs ``source`` skipped for want of a partner (image files, ``TOPIC @ STAMP ns`` bag messages), as
     its ``skipped`` attribute lists them once it has been read; [] for a source that skips none."""
     return list(getattr(source, "skipped", ()))
+
+
+#: How many skipped inputs a warning and ``skipped_first`` name.
+NAMED_SKIPPED = 5
+
+
+def skipped_fields(skipped: list[str]) -> dict[str, int | list[str]]:
+    """The ``--json`` keys of the inputs skipped for want of a partner, the same in every command (depth, check,
+    fleet rows): ``skipped_unpaired`` (how many) and ``skipped_first`` (the first :data:`NAMED_SKIPPED`)."""
+    return {"skipped_unpaired": len(skipped), "skipped_first": skipped[:NAMED_SKIPPED]}
 
 
 def thinned(items: Iterable[T], every: int = 1, max_frames: int | None = None) -> Iterator[tuple[int, T]]:
