@@ -27,7 +27,7 @@ from s2r.errors import RecordingError, S2RError
 from s2r.recordings.decode import ExpectedSize, SizeRule
 from s2r.recordings.frames import FrameSource, refuse_same_sides
 
-__all__ = ["RecordingSpec", "open_recording", "refuse_same_sides"]
+__all__ = ["RecordingSpec", "open_recording"]
 
 _FORMS = "a FOLDER, --left/--right globs, --bag, --video or --left-video/--right-video"
 
